@@ -1,0 +1,201 @@
+#include "cli_common.hpp"
+
+#include <sysid/core/discretize.hpp>
+#include <sysid/core/errors.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+
+namespace sysid::cli {
+
+namespace {
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t");
+  if (b == std::string::npos) return {};
+  const auto e = s.find_last_not_of(" \t");
+  return s.substr(b, e - b + 1);
+}
+
+}  // namespace
+
+void add_log_options(CLI::App& cmd, LogArgs& args, const LogOptionSpec& spec) {
+  CLI::Option* in = cmd.add_option("--inputs", args.inputs, spec.inputs_help);
+  if (spec.inputs_required) in->required();
+  CLI::Option* out = cmd.add_option("--outputs", args.outputs, spec.outputs_help);
+  if (spec.outputs_required) out->required();
+  cmd.add_option("--ts", args.ts,
+                 "sample time in seconds; required when the log has no time column, checked against it otherwise")
+      ->check(CLI::PositiveNumber);
+  cmd.add_option("--time-column", args.time_column, "name of the time column ('none': ignore any time column)")
+      ->capture_default_str();
+  cmd.add_option("--nan-policy", args.nan_policy,
+                 "NaN/Inf/empty cells: error (default), drop (leading/trailing rows only), interpolate (linear)")
+      ->check(CLI::IsMember({"error", "drop", "interpolate"}))
+      ->capture_default_str();
+}
+
+std::vector<std::string> split_names(const std::string& list, const std::string& option_name) {
+  std::vector<std::string> names;
+  if (trim(list).empty()) return names;
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t comma = list.find(',', start);
+    const std::string item = trim(list.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    if (item.empty()) throw CLI::ValidationError(option_name, "empty column name in '" + list + "'");
+    names.push_back(item);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return names;
+}
+
+LogOptions make_log_options(const LogArgs& args, std::vector<std::string> inputs, std::vector<std::string> outputs) {
+  LogOptions o;
+  o.inputs = std::move(inputs);
+  o.outputs = std::move(outputs);
+  o.time_column = args.time_column == "none" ? std::string() : args.time_column;
+  o.ts = args.ts;
+  o.nan_policy = args.nan_policy == "drop"          ? NanPolicy::drop_rows
+                 : args.nan_policy == "interpolate" ? NanPolicy::interpolate
+                                                    : NanPolicy::error;
+  return o;
+}
+
+LoadedLog load_log(const std::string& path, const LogOptions& options) {
+  const CsvTable table = read_csv(path);
+  LoadedLog out;
+  out.data = log_from_table(table, options);
+  if (options.time_column.empty()) return out;
+  const Eigen::Index tc = table.column(options.time_column);
+  if (tc < 0) return out;
+  // The reader drops only leading and trailing rows (drop policy): the first kept
+  // row is the first whose selected cells are all finite.
+  Eigen::Index first = 0;
+  if (options.nan_policy == NanPolicy::drop_rows) {
+    std::vector<Eigen::Index> cols{tc};
+    for (const auto* names : {&options.inputs, &options.outputs})
+      for (const auto& n : *names) cols.push_back(table.column(n));
+    auto row_ok = [&](Eigen::Index r) {
+      for (const Eigen::Index c : cols)
+        if (c >= 0 && !std::isfinite(table.values(r, c))) return false;
+      return true;
+    };
+    while (first < table.values.rows() && !row_ok(first)) ++first;
+  }
+  const Eigen::Index n = out.data.experiments.front().samples();
+  out.time = table.values.col(tc).segment(first, n);
+  // Stamps repaired by the interpolate policy: the grid they must lie on.
+  for (Eigen::Index k = 0; k < n; ++k)
+    if (!std::isfinite(out.time(k))) out.time(k) = out.time(0) + static_cast<double>(k) * out.data.Ts;
+  out.time_name = options.time_column;
+  return out;
+}
+
+ModelFile load_model(const std::string& path, bool allow_augmented) {
+  ModelFile m = read_model_json(path);
+  if (m.type == "augmented" && !allow_augmented) throw DataError(path, 0, 0, "augmented models are not supported yet");
+  return m;
+}
+
+StateSpace model_for_sample_time(const ModelFile& file, double ts, const std::string& model_path, const std::string& verb) {
+  if (!file.model.is_discrete()) {
+    note(verb, model_path + " is a continuous-time model: discretised with a zero-order hold at Ts = " + fmt(ts) + " s");
+    StateSpace d = c2d_zoh(file.model, ts);
+    d.input_names = file.model.input_names;
+    d.output_names = file.model.output_names;
+    return d;
+  }
+  if (std::abs(file.model.Ts - ts) > 1e-6 * file.model.Ts)
+    throw DataError(model_path, 0, 0,
+                    "the model's sample time " + fmt(file.model.Ts, 9) + " s differs from the log's " + fmt(ts, 9) +
+                        " s; a discrete-time model runs only at its own rate");
+  return file.model;
+}
+
+std::vector<std::string> model_input_names(const ModelFile& file) {
+  std::vector<std::string> names;
+  for (Eigen::Index j = 0; j < file.model.inputs(); ++j) names.push_back(file.model.input_name(j));
+  return names;
+}
+
+std::vector<std::string> model_output_names(const ModelFile& file) {
+  std::vector<std::string> names;
+  for (Eigen::Index i = 0; i < file.model.outputs(); ++i) names.push_back(file.model.output_name(i));
+  return names;
+}
+
+std::pair<double, double> parse_range(const std::string& text, const std::string& option_name) {
+  const auto colon = text.find(':');
+  if (colon == std::string::npos) throw CLI::ValidationError(option_name, "expected LO:HI, found '" + text + "'");
+  try {
+    std::size_t used_lo = 0, used_hi = 0;
+    const std::string a = trim(text.substr(0, colon)), b = trim(text.substr(colon + 1));
+    const double lo = std::stod(a, &used_lo), hi = std::stod(b, &used_hi);
+    if (used_lo != a.size() || used_hi != b.size() || !std::isfinite(lo) || !std::isfinite(hi))
+      throw CLI::ValidationError(option_name, "expected LO:HI with two numbers, found '" + text + "'");
+    if (!(lo < hi)) throw CLI::ValidationError(option_name, "need LO < HI, found '" + text + "'");
+    return {lo, hi};
+  } catch (const std::logic_error&) {  // std::stod: invalid_argument / out_of_range
+    throw CLI::ValidationError(option_name, "expected LO:HI with two numbers, found '" + text + "'");
+  }
+}
+
+CLI::Validator range_validator() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        try {
+          parse_range(s, "");
+        } catch (const CLI::ValidationError& e) {
+          return "expected LO:HI with numbers LO < HI, found '" + s + "'";
+        }
+        return {};
+      },
+      "LO:HI");
+}
+
+std::string fmt(double value, int digits) {
+  if (std::isnan(value)) return "n/a";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, value);
+  return buf;
+}
+
+std::string join(const std::vector<std::string>& items, const std::string& separator) {
+  std::string s;
+  for (std::size_t k = 0; k < items.size(); ++k) s += (k ? separator : "") + items[k];
+  return s;
+}
+
+std::string format_fit_lines(const Eigen::VectorXd& fit, const std::vector<std::string>& names) {
+  std::string s;
+  char buf[256];
+  for (Eigen::Index i = 0; i < fit.size(); ++i) {
+    const std::string name = i < static_cast<Eigen::Index>(names.size()) ? names[static_cast<std::size_t>(i)]
+                                                                         : "y" + std::to_string(i + 1);
+    if (std::isnan(fit(i)))
+      std::snprintf(buf, sizeof buf, "  %s: n/a\n", name.c_str());
+    else
+      std::snprintf(buf, sizeof buf, "  %s: %.2f\n", name.c_str(), fit(i));
+    s += buf;
+  }
+  return s;
+}
+
+void warn(const std::string& verb, const std::string& message) { std::cerr << "sysid " << verb << ": warning: " << message << "\n"; }
+
+void note(const std::string& verb, const std::string& message) { std::cerr << "sysid " << verb << ": " << message << "\n"; }
+
+nlohmann::json to_json_list(const Eigen::VectorXd& v) {
+  nlohmann::json j = nlohmann::json::array();
+  for (Eigen::Index i = 0; i < v.size(); ++i) {
+    if (std::isfinite(v(i)))
+      j.push_back(v(i));
+    else
+      j.push_back(nullptr);
+  }
+  return j;
+}
+
+}  // namespace sysid::cli

@@ -1,0 +1,94 @@
+#pragma once
+// Shared pieces of the sysid verbs: the log options every data-reading verb takes
+// (--inputs/--outputs/--ts/--time-column/--nan-policy), loading a log with its time
+// column, model files, number formatting and messages. No algorithm lives here.
+#include <sysid/core/errors.hpp>
+#include <sysid/core/io_data.hpp>
+#include <sysid/io/csv.hpp>
+#include <sysid/io/model_json.hpp>
+
+#include <CLI/CLI.hpp>
+#include <Eigen/Dense>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace sysid::cli {
+
+/// The log-reading options as typed on the command line.
+struct LogArgs {
+  std::string inputs;   ///< comma-separated column names
+  std::string outputs;  ///< comma-separated column names
+  std::optional<double> ts;
+  std::string time_column = "t";
+  std::string nan_policy = "error";
+};
+
+/// Which of the log options a verb offers, and their help texts.
+struct LogOptionSpec {
+  bool inputs_required = true;
+  bool outputs_required = true;
+  std::string inputs_help = "input columns of the log, comma-separated (e.g. u1,u2)";
+  std::string outputs_help = "output columns of the log, comma-separated (e.g. y1,y2)";
+};
+
+/// Adds --inputs, --outputs, --ts, --time-column and --nan-policy to `cmd`.
+void add_log_options(CLI::App& cmd, LogArgs& args, const LogOptionSpec& spec);
+
+/// "a,b,c" -> {"a","b","c"} (trimmed); empty string -> {}. An empty item is a usage error.
+std::vector<std::string> split_names(const std::string& list, const std::string& option_name);
+
+/// LogOptions from the typed options, with explicit channel lists.
+LogOptions make_log_options(const LogArgs& args, std::vector<std::string> inputs, std::vector<std::string> outputs);
+
+/// A log and its time column (empty when the log has none or it is not used),
+/// aligned with the samples kept after the NaN policy.
+struct LoadedLog {
+  IoData data;
+  Eigen::VectorXd time;
+  std::string time_name;
+};
+
+/// read_csv + log_from_table, keeping the time stamps for writing them back.
+LoadedLog load_log(const std::string& path, const LogOptions& options);
+
+/// read_model_json; refuses "augmented" models (DataError) for the verbs that
+/// cannot run them yet.
+ModelFile load_model(const std::string& path, bool allow_augmented = false);
+
+/// The model's state-space part ready to run on data sampled every `ts` seconds:
+/// a continuous model (Ts = 0) is discretised with a zero-order hold (with a note
+/// on stderr); a discrete model whose Ts differs from the log's by more than 1e-6
+/// relative is a DataError (a model runs only at its own rate).
+StateSpace model_for_sample_time(const ModelFile& file, double ts, const std::string& model_path, const std::string& verb);
+
+/// The model's channel names: the given list, else the model's names (u1.., y1.. when absent).
+std::vector<std::string> model_input_names(const ModelFile& file);
+std::vector<std::string> model_output_names(const ModelFile& file);
+
+/// "lo:hi" -> (lo, hi); throws CLI::ValidationError naming the option otherwise.
+std::pair<double, double> parse_range(const std::string& text, const std::string& option_name);
+
+/// CLI11 validator for "lo:hi" with numbers lo < hi.
+CLI::Validator range_validator();
+
+/// printf("%.*g") of a number.
+std::string fmt(double value, int digits = 6);
+
+/// "a, b, c".
+std::string join(const std::vector<std::string>& items, const std::string& separator = ", ");
+
+/// Per-output fit lines "  <name>: 97.53".
+std::string format_fit_lines(const Eigen::VectorXd& fit, const std::vector<std::string>& names);
+
+/// "sysid <verb>: warning: <message>" on stderr.
+void warn(const std::string& verb, const std::string& message);
+
+/// "sysid <verb>: <message>" on stderr (progress notes, files written).
+void note(const std::string& verb, const std::string& message);
+
+/// Vector of doubles -> JSON list (NaN written as null: JSON has no NaN).
+nlohmann::json to_json_list(const Eigen::VectorXd& v);
+
+}  // namespace sysid::cli

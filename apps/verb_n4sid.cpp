@@ -1,0 +1,341 @@
+// sysid n4sid: subspace identification (N4SID / MOESP / CVA) of a state-space
+// model from a CSV log, with validation on held-out data and an order sweep.
+#include <sysid/config.hpp>
+#include <sysid/core/modal_table.hpp>
+#include <sysid/io/atomic_file.hpp>
+#include <sysid/io/model_json.hpp>
+#include <sysid/subspace/n4sid.hpp>
+#include <sysid/subspace/order_sweep.hpp>
+#include <sysid/validate/compare.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <sstream>
+
+#include "cli_common.hpp"
+#include "verbs.hpp"
+
+namespace sysid::cli {
+
+namespace {
+
+// ---- --band-limit HZ --------------------------------------------------------
+// The Par2 remedy for gain the data do not determine above the excited band:
+// band-limit data and model with a Butterworth low-pass. The option belongs to
+// N4sidOptions (member `band_limit_hz`, added by the lead). It is offered and
+// wired automatically as soon as that member exists; until then it is absent.
+template <class Options>
+concept HasBandLimit = requires(Options o) { o.band_limit_hz = 1.0; };
+
+/// Template so that the member access is only compiled when the member exists.
+template <class Options>
+void set_band_limit(Options& options, const std::optional<double>& hz) {
+  if constexpr (HasBandLimit<Options>) {
+    if (hz) options.band_limit_hz = *hz;
+  }
+}
+
+struct N4sidArgs {
+  std::string log_path;
+  LogArgs log;
+  std::string method = "n4sid";
+  std::string order = "auto";
+  int max_order = 30;
+  std::string order_rule = "gap";
+  int horizon = 0;
+  bool enforce_stability = false;
+  std::string hankel = "auto";
+  std::string validate;
+  std::optional<double> split;
+  std::optional<double> band_limit_hz;
+  std::string out;
+};
+
+/// --order: N, auto, or A:B.
+struct OrderSpec {
+  int fixed = 0;  ///< 0 = auto
+  bool sweep = false;
+  int lo = 0, hi = 0;
+};
+
+/// Parses --order; returns an error text (empty when valid) so it doubles as a CLI11 validator.
+std::string parse_order(const std::string& text, OrderSpec& spec) {
+  auto parse_int = [](const std::string& s, int& v) {
+    if (s.empty() || s.size() > 6 || s.find_first_not_of("0123456789") != std::string::npos) return false;
+    v = std::stoi(s);
+    return v >= 1;
+  };
+  spec = {};
+  if (text == "auto") return {};
+  const auto colon = text.find(':');
+  if (colon == std::string::npos) {
+    if (!parse_int(text, spec.fixed)) return "expected N >= 1, auto, or A:B, found '" + text + "'";
+    return {};
+  }
+  spec.sweep = true;
+  if (!parse_int(text.substr(0, colon), spec.lo) || !parse_int(text.substr(colon + 1), spec.hi) || spec.lo > spec.hi)
+    return "expected A:B with 1 <= A <= B, found '" + text + "'";
+  return {};
+}
+
+std::string percent_label(double fraction) {
+  return "last " + fmt(100.0 * (1.0 - fraction), 3) + "% of samples";
+}
+
+/// Channel names for the report: the log's column names.
+std::vector<std::string> output_names(const IoData& d) {
+  std::vector<std::string> names;
+  for (Eigen::Index i = 0; i < d.outputs(); ++i) names.push_back(d.output_name(i));
+  return names;
+}
+
+std::string format_sweep_table(const std::vector<OrderSweepEntry>& table, const std::vector<std::string>& names) {
+  std::ostringstream s;
+  char buf[128];
+  std::snprintf(buf, sizeof buf, "%6s", "order");
+  s << buf;
+  for (const auto& n : names) {
+    std::snprintf(buf, sizeof buf, "  %14s", ("est " + n).c_str());
+    s << buf;
+  }
+  for (const auto& n : names) {
+    std::snprintf(buf, sizeof buf, "  %14s", ("val " + n).c_str());
+    s << buf;
+  }
+  if (names.size() > 1) {
+    std::snprintf(buf, sizeof buf, "  %10s", "val mean");
+    s << buf;
+  }
+  s << "\n";
+  auto cell = [&](double v, int width) {
+    if (std::isnan(v))
+      std::snprintf(buf, sizeof buf, "  %*s", width, "failed");
+    else
+      std::snprintf(buf, sizeof buf, "  %*.2f", width, v);
+    s << buf;
+  };
+  for (const auto& e : table) {
+    std::snprintf(buf, sizeof buf, "%6d", e.order);
+    s << buf;
+    for (Eigen::Index i = 0; i < e.estimation_fit.size(); ++i) cell(e.estimation_fit(i), 14);
+    for (Eigen::Index i = 0; i < e.validation_fit.size(); ++i) cell(e.validation_fit(i), 14);
+    if (names.size() > 1) cell(e.mean_validation_fit(), 10);
+    s << "\n";
+  }
+  return s.str();
+}
+
+void run_n4sid(const N4sidArgs& a) {
+  const std::string verb = "n4sid";
+  OrderSpec order;
+  if (const std::string err = parse_order(a.order, order); !err.empty()) throw CLI::ValidationError("--order", err);
+
+  std::vector<std::string> inputs_files{a.log_path};
+  if (!a.validate.empty()) inputs_files.push_back(a.validate);
+  if (!a.out.empty()) refuse_to_overwrite_input(a.out, inputs_files);
+
+  const LogOptions log_options =
+      make_log_options(a.log, split_names(a.log.inputs, "--inputs"), split_names(a.log.outputs, "--outputs"));
+  const IoData all = load_log(a.log_path, log_options).data;
+
+  // Estimation and validation data.
+  IoData estimation;
+  std::optional<IoData> validation;
+  std::string validation_label;
+  std::optional<double> split_fraction = a.split;
+  if (order.sweep && !split_fraction && a.validate.empty()) {
+    split_fraction = 0.7;
+    note(verb, "--order A:B compares orders on validation data; none given, so using --split 0.7");
+  }
+  if (split_fraction) {
+    DataSplit parts = split(all, *split_fraction);
+    estimation = std::move(parts.estimation);
+    validation = std::move(parts.validation);
+    validation_label = percent_label(*split_fraction);
+  } else {
+    estimation = all;
+    if (!a.validate.empty()) {
+      IoData v = load_log(a.validate, log_options).data;
+      if (std::abs(v.Ts - all.Ts) > 1e-6 * all.Ts)
+        throw DataError(a.validate, 0, 0,
+                        "sample time " + fmt(v.Ts, 9) + " s differs from the estimation log's " + fmt(all.Ts, 9) + " s");
+      validation = std::move(v);
+      validation_label = a.validate;
+    }
+  }
+
+  N4sidOptions options;
+  options.weighting = a.method == "moesp" ? SubspaceWeighting::moesp
+                      : a.method == "cva" ? SubspaceWeighting::cva
+                                          : SubspaceWeighting::n4sid;
+  options.order = order.fixed;
+  options.max_order = a.max_order;
+  options.order_rule = a.order_rule == "svc" ? OrderRule::svc : OrderRule::gap;
+  options.horizon = a.horizon;
+  options.route = a.hankel == "qr" ? HankelRoute::qr : a.hankel == "cholesky" ? HankelRoute::cholesky : HankelRoute::automatic;
+  options.enforce_stability = a.enforce_stability;
+  set_band_limit(options, a.band_limit_hz);
+
+  const std::vector<std::string> names = output_names(all);
+  std::ostringstream report;
+  N4sidResult res;
+  Eigen::VectorXd validation_fit;
+  nlohmann::json sweep_json = nlohmann::json::array();
+  if (order.sweep) {
+    const std::vector<OrderSweepEntry> table = n4sid_order_sweep(estimation, *validation, options, order.lo, order.hi);
+    const OrderSweepEntry* best = nullptr;
+    for (const auto& e : table) {
+      nlohmann::json row = {{"order", e.order},
+                            {"estimation_fit_percent", to_json_list(e.estimation_fit)},
+                            {"validation_fit_percent", to_json_list(e.validation_fit)}};
+      sweep_json.push_back(row);
+      if (!e.ok) {
+        for (const auto& w : e.warnings) warn(verb, w);
+        continue;
+      }
+      // Strictly better only: among equal fits the lowest order wins.
+      if (best == nullptr || e.mean_validation_fit() > best->mean_validation_fit()) best = &e;
+    }
+    if (best == nullptr) throw NumericalError("n4sid: identification failed at every order " + a.order);
+    report << "order sweep " << order.lo << ".." << order.hi << " (horizon " << best->result.horizon
+           << " for all orders, simulation fit [%], validation on " << validation_label << "):\n"
+           << format_sweep_table(table, names);
+    report << "best mean validation fit: order " << best->order << " (" << fmt(best->mean_validation_fit(), 4)
+           << " %); writing that model\n\n";
+    res = best->result;
+    res.order_rule = "best mean validation fit over orders " + std::to_string(order.lo) + ".." + std::to_string(order.hi);
+    validation_fit = best->validation_fit;
+  } else {
+    res = n4sid(estimation, options);
+    if (validation) {
+      CompareOptions co;
+      co.input_offset = res.input_offset;
+      co.output_offset = res.output_offset;
+      validation_fit = compare_fit(res.model, res.K, *validation, co);
+    }
+  }
+
+  // Report.
+  report << res.brief_report() << "\n";
+  report << "order: " << res.order << " (" << res.order_rule << ")\n";
+  {
+    const Eigen::Index shown = std::min<Eigen::Index>(res.singular_values.size(), 2 * res.order + 2);
+    report << "leading singular values (" << shown << " of " << res.singular_values.size() << "):";
+    for (Eigen::Index k = 0; k < shown; ++k) report << " " << fmt(res.singular_values(k), 4);
+    report << "\n";
+  }
+  report << "fit on estimation data [%] (simulation, x0 estimated"
+         << (split_fraction ? ", first " + fmt(100.0 * *split_fraction, 3) + "% of samples" : std::string()) << "):\n"
+         << format_fit_lines(res.fit_percent, names);
+  if (validation)
+    report << "fit on validation data [%] (simulation, x0 estimated, " << validation_label << "):\n"
+           << format_fit_lines(validation_fit, names);
+  report << "excited band: " << fmt(res.excited_band_low_hz, 4) << " .. " << fmt(res.excited_band_high_hz, 4) << " Hz\n";
+  report << "modes:\n" << format_modal_table(modal_table(res.model));
+  std::cout << report.str() << std::flush;
+  for (const auto& w : res.warnings) warn(verb, w);
+
+  if (a.out.empty()) return;
+  ModelFile file;
+  file.type = "state-space";
+  file.model = res.model;
+  file.model.input_names = all.input_names;
+  file.model.output_names = all.output_names;
+  file.K = res.K;
+  file.noise_covariance = res.noise_covariance;
+  file.x0 = res.x0;
+  file.input_offset = res.input_offset;
+  file.output_offset = res.output_offset;
+  nlohmann::json& p = file.provenance;
+  p["method"] = to_string(res.weighting);
+  p["order"] = res.order;
+  p["order_rule"] = res.order_rule;
+  p["horizon"] = res.horizon;
+  p["data"] = a.log_path;
+  p["fit_percent"] = to_json_list(res.fit_percent);
+  if (validation) {
+    p["validation_fit_percent"] = to_json_list(validation_fit);
+    p["validation"] = validation_label;
+  }
+  if (order.sweep) p["order_sweep"] = sweep_json;
+  p["singular_values"] = to_json_list(res.singular_values);
+  p["excited_band_hz"] = {res.excited_band_low_hz, res.excited_band_high_hz};
+  p["hankel_route"] = to_string(res.route_used);
+  if (a.enforce_stability) p["enforce_stability"] = true;
+  if constexpr (HasBandLimit<N4sidOptions>) {
+    if (a.band_limit_hz) p["band_limit_hz"] = *a.band_limit_hz;
+  }
+  p["sysid_version"] = SYSID_VERSION_STRING;
+  write_model_json(a.out, file);
+  note(verb, "wrote " + a.out);
+}
+
+}  // namespace
+
+Verb register_n4sid(CLI::App& app) {
+  auto args = std::make_shared<N4sidArgs>();
+  CLI::App* cmd = app.add_subcommand("n4sid", "Identify a state-space model from a CSV log (N4SID / MOESP / CVA subspace method)");
+  cmd->add_option("log", args->log_path, "CSV log with the input and output columns")->required();
+  add_log_options(*cmd, args->log, LogOptionSpec{});
+  cmd->add_option("--method", args->method, "subspace weighting: n4sid, moesp or cva")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"n4sid", "moesp", "cva"}));
+  cmd->add_option("--order", args->order,
+                  "model order: N; auto (from the singular values, see --order-rule); or A:B (identify every order A..B and "
+                  "keep the one with the best validation fit)")
+      ->capture_default_str()
+      ->check(CLI::Validator(
+          [](std::string& s) {
+            OrderSpec spec;
+            return parse_order(s, spec);
+          },
+          "N|auto|A:B"));
+  cmd->add_option("--max-order", args->max_order, "largest order the automatic choice considers")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 10000));
+  cmd->add_option("--order-rule", args->order_rule,
+                  "automatic order rule: gap (largest singular-value gap) or svc (Bauer's criterion, for --method cva)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"gap", "svc"}));
+  cmd->add_option("--horizon", args->horizon, "block rows i of the past/future Hankel matrix (default: automatic)")
+      ->check(CLI::Range(2, 100000));
+  cmd->add_flag("--enforce-stability", args->enforce_stability, "estimate A so that the model is always stable");
+  cmd->add_option("--hankel", args->hankel, "Hankel compression route: auto, qr (most accurate) or cholesky (fastest)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "qr", "cholesky"}));
+  CLI::Option* val = cmd->add_option("--validate", args->validate,
+                                     "validation log (same columns): identify on LOG, report the fit on FILE");
+  CLI::Option* spl = cmd->add_option("--split", args->split,
+                                     "identify on the first fraction F of LOG, validate on the rest (0 < F < 1)")
+                         ->check(CLI::Validator(
+                             [](std::string& s) -> std::string {
+                               try {
+                                 const double f = std::stod(s);
+                                 if (f > 0.0 && f < 1.0) return {};
+                               } catch (const std::exception&) {
+                               }
+                               return "expected a fraction 0 < F < 1, found '" + s + "'";
+                             },
+                             "F"));
+  val->excludes(spl);
+  if constexpr (HasBandLimit<N4sidOptions>) {
+    cmd->add_option("--band-limit", args->band_limit_hz,
+                    "band-limit data and model with a Butterworth low-pass at HZ (Par2 paper remedy for gain above the "
+                    "excited band)")
+        ->check(CLI::PositiveNumber);
+  }
+  cmd->add_option("--out", args->out, "model file to write (JSON, with K, offsets, x0 and provenance)");
+  cmd->footer(
+      "Prints the order and the rule that chose it, the leading singular values, the\n"
+      "simulation fit on estimation and validation data, the excited band and the modes.\n"
+      "Warnings go to stderr. The model file is written at the end, atomically.\n"
+      "Example:\n"
+      "  sysid n4sid log.csv --inputs u --outputs y --order auto --split 0.7 --out model.json\n"
+      "  sysid n4sid log.csv --inputs u1,u2 --outputs y1,y2 --order 2:12 --validate run2.csv --out model.json");
+  return {cmd, [args] { run_n4sid(*args); }};
+}
+
+}  // namespace sysid::cli

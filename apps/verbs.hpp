@@ -1,0 +1,23 @@
+#pragma once
+// Registration of the sysid verbs. Each verb file defines one register_<verb>()
+// that adds a CLI11 subcommand (options, help with an example) and returns the
+// action main() runs after a successful parse, inside the one error funnel.
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace sysid::cli {
+
+/// A registered verb: its subcommand and what to run when it was chosen.
+/// run() reports failure only by throwing (see main.cpp for the exit codes).
+struct Verb {
+  CLI::App* command = nullptr;
+  std::function<void()> run;
+};
+
+Verb register_n4sid(CLI::App& app);
+Verb register_simulate(CLI::App& app);
+Verb register_compare(CLI::App& app);
+Verb register_show(CLI::App& app);
+Verb register_excite(CLI::App& app);
+
+}  // namespace sysid::cli

@@ -1,0 +1,224 @@
+#pragma once
+/// @file
+/// Purpose: the block-Hankel data matrix of subspace identification, compressed
+/// to its square-root Gram factor without ever being formed.
+///
+/// For horizon i (i past and i future block rows), the data matrix of one
+/// experiment with N samples has j = N - 2i + 1 columns
+///
+///   H = [ U_{0|2i-1} ]   U_{0|2i-1} has block rows u(t), u(t+1), ..., u(t+2i-1)
+///       [ Y_{0|2i-1} ]   Y_{0|2i-1} likewise for y,           t = 0..j-1
+///
+/// (Van Overschee & De Moor, "Subspace Identification for Linear Systems", 1996,
+/// sec. 1.3.2; k = 2i(m+l) rows). What the algorithms need is an upper-triangular
+/// R (k x k) with R^T R = H H^T, i.e. H = R^T Q^T with orthonormal Q (the LQ
+/// factorisation of the book, L = R^T). Every later projection is a product of
+/// rows of R^T, because Q drops out of all norms and projections.
+///
+/// Method, two routes (as SLICOT IB01MD documents):
+///  - qr: H^T is produced in chunks of rows and folded into a StreamingQR.
+///    Accurate (backward stable); ~2 j k^2 flops.
+///  - cholesky: the Gram matrix G = H H^T is built from the block-Toeplitz
+///    structure of the data: block (0,q) is a lagged correlation sum, and block
+///    (p,q) follows from block (p-1,q-1) by adding the one sample product that
+///    enters the window and removing the one that leaves it; ~2i j (m+l)^2 flops
+///    instead of j k^2. Then R = chol(G). Squares the condition number, so the
+///    automatic route falls back to qr when the factorisation fails or the
+///    estimated condition number of G exceeds `max_gram_condition`.
+/// Several experiments add their Gram matrices (resp. continue the QR): no block
+/// column ever straddles two experiments, so there is no seam.
+///
+/// Preconditions: horizon >= 1; every experiment has N >= 2i samples; the total
+/// number of columns j >= k (otherwise R is rank deficient: std::invalid_argument).
+#include <Eigen/Dense>
+#include <sysid/core/io_data.hpp>
+#include <sysid/core/streaming_qr.hpp>
+#include <algorithm>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace sysid {
+
+enum class HankelRoute { automatic, qr, cholesky };
+
+inline const char* to_string(HankelRoute r) {
+  switch (r) {
+    case HankelRoute::automatic: return "automatic";
+    case HankelRoute::qr: return "qr";
+    case HankelRoute::cholesky: return "cholesky";
+  }
+  return "?";
+}
+
+struct BlockHankelOptions {
+  int horizon = 10;                           ///< i: number of past (and of future) block rows
+  HankelRoute route = HankelRoute::automatic;  ///< automatic = cholesky, falling back to qr
+  /// Largest acceptable estimated condition number of the Gram matrix on the
+  /// cholesky route. 1e12 keeps about 4 significant digits in R in the worst
+  /// case (relative error ~ eps * cond(G)); beyond that QR is used.
+  double max_gram_condition = 1e12;
+};
+
+/// Row ranges of the partitions of H, in rows of H (= columns of R).
+struct HankelLayout {
+  Eigen::Index horizon = 0, inputs = 0, outputs = 0;
+  Eigen::Index size() const { return 2 * horizon * (inputs + outputs); }
+  /// First row of u(t + block) within H.
+  Eigen::Index u_row(Eigen::Index block) const { return block * inputs; }
+  /// First row of y(t + block) within H.
+  Eigen::Index y_row(Eigen::Index block) const { return 2 * horizon * inputs + block * outputs; }
+  /// Rows of U_{first|last} or Y_{first|last} (block rows first..last inclusive).
+  std::vector<Eigen::Index> u_rows(Eigen::Index first, Eigen::Index last) const { return rows(u_row(first), (last - first + 1) * inputs); }
+  std::vector<Eigen::Index> y_rows(Eigen::Index first, Eigen::Index last) const { return rows(y_row(first), (last - first + 1) * outputs); }
+
+ private:
+  static std::vector<Eigen::Index> rows(Eigen::Index start, Eigen::Index count) {
+    std::vector<Eigen::Index> r(static_cast<std::size_t>(count));
+    for (Eigen::Index k = 0; k < count; ++k) r[static_cast<std::size_t>(k)] = start + k;
+    return r;
+  }
+};
+
+struct BlockHankelCompression {
+  Eigen::MatrixXd R;        ///< k x k upper triangular, R^T R = H H^T
+  HankelLayout layout;
+  Eigen::Index columns = 0;  ///< j, summed over experiments
+  HankelRoute route_used = HankelRoute::qr;
+  double gram_condition_estimate = 0;  ///< (max R_ii / min R_ii)^2, a cheap lower bound on cond(G)
+  std::vector<std::string> warnings;
+
+  /// Rows of L = R^T selected by H-row indices: the coefficients of those data
+  /// rows in the orthonormal basis Q^T.
+  Eigen::MatrixXd l_rows(const std::vector<Eigen::Index>& rows) const {
+    Eigen::MatrixXd out(static_cast<Eigen::Index>(rows.size()), R.rows());
+    for (std::size_t k = 0; k < rows.size(); ++k) out.row(static_cast<Eigen::Index>(k)) = R.col(rows[k]).transpose();
+    return out;
+  }
+};
+
+namespace detail {
+
+/// Lagged sums S(p,q) = sum_{t=0}^{j-1} x(t+p) y(t+q)^T for p, q = 0..i2-1,
+/// written as an (i2*mx) x (i2*my) block matrix. The first block row and column
+/// are correlation sums over the whole record, computed in chunks of rows with
+/// one GEMM per chunk (BLAS-3 shape, no copy of the record); every other block
+/// follows from its upper-left neighbour by adding the product that enters the
+/// window and removing the one that leaves it.
+template <class MX, class MY>
+Eigen::MatrixXd lagged_sums(const MX& x, const MY& y, Eigen::Index i2, Eigen::Index j, bool symmetric) {
+  const Eigen::Index mx = x.cols(), my = y.cols();
+  Eigen::MatrixXd s = Eigen::MatrixXd::Zero(i2 * mx, i2 * my);
+  Eigen::MatrixXd first_row = Eigen::MatrixXd::Zero(mx, i2 * my);  // S(0,q)
+  Eigen::MatrixXd first_col = Eigen::MatrixXd::Zero(my, i2 * mx);  // S(p,0)^T
+  constexpr Eigen::Index chunk = 4096;
+  Eigen::MatrixXd shifted_y(chunk, i2 * my), shifted_x;
+  if (!symmetric) shifted_x.resize(chunk, i2 * mx);
+  for (Eigen::Index t0 = 0; t0 < j; t0 += chunk) {
+    const Eigen::Index c = std::min(chunk, j - t0);
+    for (Eigen::Index q = 0; q < i2; ++q) shifted_y.block(0, q * my, c, my) = y.middleRows(t0 + q, c);
+    first_row.noalias() += x.middleRows(t0, c).transpose() * shifted_y.topRows(c);
+    if (!symmetric) {
+      for (Eigen::Index p = 0; p < i2; ++p) shifted_x.block(0, p * mx, c, mx) = x.middleRows(t0 + p, c);
+      first_col.noalias() += y.middleRows(t0, c).transpose() * shifted_x.topRows(c);
+    }
+  }
+  s.topRows(mx) = first_row;
+  for (Eigen::Index p = 1; p < i2; ++p)
+    s.block(p * mx, 0, mx, my) = symmetric ? Eigen::MatrixXd(first_row.middleCols(p * my, my).transpose())
+                                           : Eigen::MatrixXd(first_col.middleCols(p * mx, mx).transpose());
+  for (Eigen::Index p = 1; p < i2; ++p)
+    for (Eigen::Index q = 1; q < i2; ++q)
+      s.block(p * mx, q * my, mx, my) = s.block((p - 1) * mx, (q - 1) * my, mx, my) +
+                                        x.row(p - 1 + j).transpose() * y.row(q - 1 + j) -
+                                        x.row(p - 1).transpose() * y.row(q - 1);
+  return s;
+}
+
+/// Adds H H^T of one experiment to G (in H layout). With the layout
+/// [U_{0|2i-1}; Y_{0|2i-1}] the four quadrants of G are exactly the lagged-sum
+/// matrices of (u,u), (u,y), (y,u) and (y,y).
+inline void add_gram(const Experiment& e, const HankelLayout& lay, Eigen::MatrixXd& gram) {
+  const Eigen::Index i2 = 2 * lay.horizon, j = e.samples() - i2 + 1;
+  const Eigen::Index nu = i2 * lay.inputs, ny = i2 * lay.outputs;
+  gram.topLeftCorner(nu, nu) += lagged_sums(e.u, e.u, i2, j, true);
+  const Eigen::MatrixXd uy = lagged_sums(e.u, e.y, i2, j, false);
+  gram.topRightCorner(nu, ny) += uy;
+  gram.bottomLeftCorner(ny, nu) += uy.transpose();
+  gram.bottomRightCorner(ny, ny) += lagged_sums(e.y, e.y, i2, j, true);
+}
+
+/// Folds the rows of H^T of one experiment into the streaming QR.
+inline void add_qr_rows(const Experiment& e, const HankelLayout& lay, StreamingQR& qr) {
+  const Eigen::Index i2 = 2 * lay.horizon;
+  const Eigen::Index j = e.samples() - i2 + 1;
+  Eigen::Index t0 = 0;
+  while (t0 < j) {
+    const Eigen::Index c = std::min(qr.free_rows(), j - t0);
+    auto block = qr.next_rows(c);
+    for (Eigen::Index t = 0; t < i2; ++t) {
+      block.middleCols(lay.u_row(t), lay.inputs) = e.u.middleRows(t0 + t, c);
+      block.middleCols(lay.y_row(t), lay.outputs) = e.y.middleRows(t0 + t, c);
+    }
+    qr.commit_rows(c);
+    t0 += c;
+  }
+}
+
+inline double diag_condition(const Eigen::MatrixXd& r) {
+  const Eigen::VectorXd d = r.diagonal().cwiseAbs();
+  const double lo = d.minCoeff(), hi = d.maxCoeff();
+  return lo > 0 ? (hi / lo) * (hi / lo) : std::numeric_limits<double>::infinity();
+}
+
+}  // namespace detail
+
+/// Compresses the block-Hankel matrix of `data` (all experiments) into R.
+inline BlockHankelCompression compress_block_hankel(const IoData& data, const BlockHankelOptions& options = {}) {
+  if (options.horizon < 1) throw std::invalid_argument("block-hankel: need horizon >= 1");
+  BlockHankelCompression out;
+  out.layout = {options.horizon, data.inputs(), data.outputs()};
+  const Eigen::Index k = out.layout.size();
+  for (const auto& e : data.experiments) {
+    if (e.samples() < 2 * options.horizon)
+      throw std::invalid_argument("block-hankel: experiment " + e.source + " has " + std::to_string(e.samples()) +
+                                  " samples, need at least 2*horizon = " + std::to_string(2 * options.horizon));
+    out.columns += e.samples() - 2 * options.horizon + 1;
+  }
+  if (out.columns < k)
+    throw std::invalid_argument("block-hankel: too few samples for horizon " + std::to_string(options.horizon) + ": " +
+                                std::to_string(out.columns) + " Hankel columns, need at least 2*horizon*(inputs+outputs) = " +
+                                std::to_string(k) + " (about " + std::to_string(k + 2 * options.horizon - 1) +
+                                " samples); use a shorter horizon or more data");
+
+  if (options.route != HankelRoute::qr) {
+    Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(k, k);
+    for (const auto& e : data.experiments) detail::add_gram(e, out.layout, gram);
+    Eigen::LLT<Eigen::MatrixXd> llt(gram);
+    if (llt.info() == Eigen::Success) {
+      out.R = llt.matrixU();
+      out.gram_condition_estimate = detail::diag_condition(out.R);
+      out.route_used = HankelRoute::cholesky;
+      if (out.gram_condition_estimate <= options.max_gram_condition || options.route == HankelRoute::cholesky) {
+        if (out.gram_condition_estimate > options.max_gram_condition)
+          out.warnings.push_back("block-hankel: Gram matrix condition ~" + std::to_string(out.gram_condition_estimate) +
+                                 " on the forced cholesky route; R may be inaccurate");
+        return out;
+      }
+      out.warnings.push_back("block-hankel: Gram matrix ill-conditioned (~" + std::to_string(out.gram_condition_estimate) +
+                             "), fell back to QR");
+    } else {
+      if (options.route == HankelRoute::cholesky)
+        throw std::invalid_argument("block-hankel: Cholesky factorisation of the Gram matrix failed (data rank deficient)");
+      out.warnings.push_back("block-hankel: Cholesky factorisation failed, fell back to QR");
+    }
+  }
+  StreamingQR qr(k);
+  for (const auto& e : data.experiments) detail::add_qr_rows(e, out.layout, qr);
+  out.R = qr.r();
+  out.gram_condition_estimate = detail::diag_condition(out.R);
+  out.route_used = HankelRoute::qr;
+  return out;
+}
+
+}  // namespace sysid

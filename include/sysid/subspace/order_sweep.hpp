@@ -1,0 +1,102 @@
+#pragma once
+/// @file
+/// Purpose: choose the model order by validation: identify one model per order
+/// lo..hi with the same subspace settings and report the simulation fit of each
+/// on estimation and on validation data (the "fit versus order" table of Fig. 16
+/// of the Par2 paper). Unlike the singular-value rules of order_selection.hpp it
+/// measures what the user cares about, the fit on data the model never saw.
+///
+/// Method: one n4sid() per order with the SAME horizon for all orders, chosen for
+/// the largest order `hi` (so the orders differ only in the truncation of the same
+/// SVD, and a difference in fit is due to the order alone). Validation is by
+/// simulation from an x0 estimated on the validation data (validate/compare.hpp),
+/// with the offsets of each identified model removed.
+///
+/// Preconditions: 1 <= lo <= hi; estimation and validation have the same channels
+/// and sample time; base.order is ignored. Violations throw std::invalid_argument.
+/// Numerical aspects: (hi - lo + 1) identifications; each recompresses the Hankel
+/// matrix, so the cost is (hi - lo + 1) times one n4sid() at horizon(hi).
+#include <sysid/core/errors.hpp>
+#include <sysid/core/io_data.hpp>
+#include <sysid/subspace/n4sid.hpp>
+#include <sysid/validate/compare.hpp>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace sysid {
+
+struct OrderSweepEntry {
+  int order = 0;
+  Eigen::VectorXd estimation_fit;  ///< per output, simulation fit on the estimation data (n4sid's own)
+  Eigen::VectorXd validation_fit;  ///< per output, simulation fit on the validation data, x0 estimated
+  std::vector<std::string> warnings;  ///< n4sid's warnings, or why this order failed (then the fits are NaN)
+  bool ok = false;                    ///< false when the identification failed (NumericalError) at this order
+  N4sidResult result;                 ///< the identified model and diagnostics (when ok)
+
+  /// Mean validation fit over the outputs (NaN when the order failed).
+  double mean_validation_fit() const {
+    return ok && validation_fit.size() > 0 ? validation_fit.mean() : std::numeric_limits<double>::quiet_NaN();
+  }
+};
+
+/// Horizon that n4sid() chooses automatically for largest order `hi` on `data`
+/// (the rule of n4sid(): max(10, 2 ceil(hi / l)), shortened for short data).
+/// tests/unit/subspace_order_sweep.cpp checks it against n4sid()'s own choice.
+inline int order_sweep_horizon(const IoData& data, int hi) {
+  const Eigen::Index m = data.inputs(), l = data.outputs();
+  int horizon = std::max(10, 2 * static_cast<int>((hi + l - 1) / l));
+  Eigen::Index shortest = data.experiments.front().samples();
+  for (const auto& e : data.experiments) shortest = std::min(shortest, e.samples());
+  while (horizon > 2 && (2 * horizon > shortest || 4 * 2 * horizon * (m + l) > data.total_samples())) --horizon;
+  return horizon;
+}
+
+/// Purpose: the order sweep described in the file comment.
+/// Returns one entry per order lo..hi, in increasing order. An order at which the
+/// identification fails numerically (NumericalError, e.g. the order exceeds the
+/// rank the data support) is kept with ok = false, NaN fits and the reason in its
+/// warnings; every other exception propagates (bad data, bad options).
+/// Example: `auto table = n4sid_order_sweep(est, val, {}, 1, 12);`
+inline std::vector<OrderSweepEntry> n4sid_order_sweep(const IoData& estimation, const IoData& validation, N4sidOptions base,
+                                                      int lo, int hi) {
+  if (lo < 1) throw std::invalid_argument("order sweep: need lo >= 1");
+  if (hi < lo) throw std::invalid_argument("order sweep: need lo <= hi (" + std::to_string(lo) + " > " + std::to_string(hi) + ")");
+  estimation.validate();
+  validation.validate();
+  if (validation.inputs() != estimation.inputs() || validation.outputs() != estimation.outputs())
+    throw std::invalid_argument("order sweep: estimation and validation data have different channels");
+  if (base.horizon == 0) base.horizon = order_sweep_horizon(estimation, hi);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<OrderSweepEntry> table;
+  for (int order = lo; order <= hi; ++order) {
+    OrderSweepEntry entry;
+    entry.order = order;
+    N4sidOptions options = base;
+    options.order = order;
+    try {
+      entry.result = n4sid(estimation, options);
+    } catch (const NumericalError& e) {
+      entry.warnings.push_back(std::string("order ") + std::to_string(order) + " failed: " + e.what());
+      entry.estimation_fit = Eigen::VectorXd::Constant(estimation.outputs(), nan);
+      entry.validation_fit = Eigen::VectorXd::Constant(estimation.outputs(), nan);
+      table.push_back(std::move(entry));
+      continue;
+    }
+    entry.ok = true;
+    entry.warnings = entry.result.warnings;
+    entry.estimation_fit = entry.result.fit_percent;
+    CompareOptions co;
+    co.input_offset = entry.result.input_offset;
+    co.output_offset = entry.result.output_offset;
+    entry.validation_fit = compare_fit(entry.result.model, entry.result.K, validation, co);
+    table.push_back(std::move(entry));
+  }
+  return table;
+}
+
+}  // namespace sysid

@@ -1,0 +1,244 @@
+#pragma once
+/// @file
+/// Purpose: compare a model with measured data: initial-state estimation, k-step
+/// ahead prediction with the innovation-form (Kalman) predictor, and the fit %
+/// of simulation or prediction (DESIGN.md "Fit and validation").
+///
+/// The model is the innovation form identified by the subspace methods
+///
+///   x[t+1] = A x[t] + B u[t] + K e[t],   y[t] = C x[t] + D u[t] + e[t],
+///
+/// whose one-step predictor is x^[t+1|t] = A x^[t|t-1] + B u[t] + K (y[t] - y^[t|t-1]),
+/// y^[t|t-1] = C x^[t|t-1] + D u[t] (Ljung, System Identification: Theory for the
+/// User, 2nd ed., sec. 4.3, eq. 4.86 with the innovation form 4.84).
+///
+/// Offsets: compare() takes the data in the units of the log and subtracts
+/// CompareOptions::input_offset / output_offset itself (the means n4sid removed,
+/// stored in the model file), and returns y_hat in the units of the log.
+/// estimate_initial_state() and predict_k_step() work on offset-free data.
+#include <sysid/core/io_data.hpp>
+#include <sysid/core/simulate.hpp>
+#include <sysid/core/state_space.hpp>
+#include <sysid/validate/fit.hpp>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace sysid {
+
+/// Purpose: least-squares initial state x0 of a model for measured data, i.e. the
+/// x0 minimising || y - simulate(u, x0) || over the first `max_samples` samples.
+///
+/// Method: the output is affine in x0, y[t] = y_0[t] + C A^t x0 with y_0 =
+/// simulate(u, 0), so x0 solves the stacked regression
+///   [C; C A; C A^2; ...] x0 = y - y_0        (N' l equations, N' = min(N, max_samples)),
+/// by a complete orthogonal decomposition (rank-revealing QR) of the stacked
+/// observability matrix, never by normal equations: for lightly damped modes the
+/// columns of that matrix are long and nearly parallel, and squaring its condition
+/// number would lose half the digits. The columns are equilibrated to unit norm
+/// before the QR (it is then invariant to the scaling of the state basis).
+///
+/// Preconditions: sys discrete (Ts > 0); u is N x m, y is N x l with the same N >= 1;
+/// max_samples >= 1 (std::invalid_argument otherwise).
+/// Numerical aspects: O(N' l n^2) for the regression plus one simulation;
+/// memory O(N' l n). A direction the data cannot see (unobservable, or decayed to
+/// nothing within N' samples) gets the minimum-norm value 0 (rank tolerance of
+/// Eigen's COD: about n eps relative to the largest column norm).
+/// Example: `Eigen::VectorXd x0 = estimate_initial_state(model, u, y);`
+inline Eigen::VectorXd estimate_initial_state(const StateSpace& sys, const Eigen::MatrixXd& u, const Eigen::MatrixXd& y,
+                                              Eigen::Index max_samples = 2000) {
+  if (max_samples < 1) throw std::invalid_argument("estimate_initial_state: need max_samples >= 1");
+  if (u.rows() != y.rows())
+    throw std::invalid_argument("estimate_initial_state: need u.rows() == y.rows() (" + std::to_string(u.rows()) +
+                                " != " + std::to_string(y.rows()) + ")");
+  if (y.cols() != sys.outputs())
+    throw std::invalid_argument("estimate_initial_state: need y.cols() == outputs (" + std::to_string(y.cols()) +
+                                " != " + std::to_string(sys.outputs()) + ")");
+  if (y.rows() < 1) throw std::invalid_argument("estimate_initial_state: need at least 1 sample");
+  const Eigen::Index n = sys.order(), l = sys.outputs();
+  if (n == 0) return Eigen::VectorXd();
+  const Eigen::Index samples = std::min(y.rows(), max_samples);
+  const Eigen::MatrixXd y0 = simulate(sys, u.topRows(samples));
+  Eigen::MatrixXd obs(samples * l, n);
+  Eigen::VectorXd rhs(samples * l);
+  Eigen::MatrixXd lambda = sys.C;  // C A^t
+  for (Eigen::Index t = 0; t < samples; ++t) {
+    obs.middleRows(t * l, l) = lambda;
+    rhs.segment(t * l, l) = (y.row(t) - y0.row(t)).transpose();
+    lambda = lambda * sys.A;
+  }
+  Eigen::VectorXd scale = obs.colwise().norm().transpose();
+  for (Eigen::Index c = 0; c < n; ++c)
+    if (!(scale(c) > 0) || !std::isfinite(scale(c))) scale(c) = 1.0;
+  obs = obs * scale.cwiseInverse().asDiagonal();
+  const Eigen::VectorXd z = obs.completeOrthogonalDecomposition().solve(rhs);
+  return z.cwiseQuotient(scale);
+}
+
+/// Purpose: k-step-ahead prediction y^[t|t-k] (N x l) of the innovation-form model:
+/// the Kalman predictor runs on the measured y up to time t-k, then the model runs
+/// open loop (no output feedback) over the k-1 remaining steps, with the measured
+/// inputs. k = 1 is the one-step predictor (y - y^ is the innovation when the
+/// model and x0 are the true ones); for t < k the prediction is the open-loop
+/// simulation from x0, so k >= N equals simulate(u, x0).
+///
+/// Method: the filter states xf[s] = x^[s|s-1] (xf[0] = x0) come from one pass of
+/// the predictor recursion (A - K C) x + (B - K D) u + K y. Then
+///   x^[t|t-k] = A^(k-1) xf[t-k+1] + sum_{j=t-k+1}^{t-1} A^(t-1-j) B u[j].
+/// For a stable A (spectral radius < 1) the sum is the difference of the zero-state
+/// simulation z: sum = z[t] - A^(k-1) z[t-k+1], so
+///   x^[t|t-k] = z[t] + A^(k-1) (xf[t-k+1] - z[t-k+1]),
+/// two GEMMs over the record, O(N n^2) whatever k. For an unstable A, z grows
+/// without bound while x^ follows the data, and the difference would cancel
+/// catastrophically; there the k-1 open-loop steps are run explicitly from every
+/// xf[t-k+1], O(N k n^2).
+///
+/// Preconditions: sys discrete; K is n x l; u is N x m, y is N x l; k >= 1; x0 empty
+/// (zero) or of size n. Violations throw std::invalid_argument.
+/// Numerical aspects: the filter recursion is stable when A - K C is (which the
+/// steady-state Kalman gain guarantees for a detectable model).
+inline Eigen::MatrixXd predict_k_step(const StateSpace& sys, const Eigen::MatrixXd& K, const Eigen::MatrixXd& u,
+                                      const Eigen::MatrixXd& y, int k, const Eigen::VectorXd& x0) {
+  detail::check_simulation_args(sys, u.cols(), x0, "predict_k_step");
+  const Eigen::Index n = sys.order(), l = sys.outputs(), N = u.rows();
+  if (k < 1) throw std::invalid_argument("predict_k_step: need k >= 1");
+  if (y.rows() != N || y.cols() != l)
+    throw std::invalid_argument("predict_k_step: need y to be " + std::to_string(N) + " x " + std::to_string(l) + ", is " +
+                                std::to_string(y.rows()) + " x " + std::to_string(y.cols()));
+  if (K.rows() != n || K.cols() != l)
+    throw std::invalid_argument("predict_k_step: need K to be " + std::to_string(n) + " x " + std::to_string(l) + ", is " +
+                                std::to_string(K.rows()) + " x " + std::to_string(K.cols()));
+  const Eigen::VectorXd x_init = x0.size() == 0 ? Eigen::VectorXd(Eigen::VectorXd::Zero(n)) : x0;
+  if (static_cast<Eigen::Index>(k) >= N) return simulate(sys, u, x_init);
+
+  // Filter states xf[s] = x^[s|s-1], s = 0..N-1, as columns (n x N).
+  Eigen::MatrixXd xf(n, N);
+  {
+    const Eigen::MatrixXd F = sys.A - K * sys.C;
+    const Eigen::MatrixXd G = sys.B - K * sys.D;
+    Eigen::MatrixXd drive(n, N);  // (B - K D) u[s] + K y[s]
+    drive.noalias() = G * u.transpose();
+    drive.noalias() += K * y.transpose();
+    xf.col(0) = x_init;
+    for (Eigen::Index s = 0; s + 1 < N; ++s) xf.col(s + 1).noalias() = F * xf.col(s) + drive.col(s);
+  }
+  if (k == 1) {
+    Eigen::MatrixXd yhat = xf.transpose() * sys.C.transpose();
+    yhat.noalias() += u * sys.D.transpose();
+    return yhat;
+  }
+
+  const Eigen::Index kk = k;
+  Eigen::MatrixXd xp(n, N);  // x^[t|t-k]
+  // t < k: open-loop from x0 (no measurement old enough to use).
+  xp.leftCols(kk) = simulate_states(sys, u.topRows(kk), x_init).transpose();
+  const double radius = n > 0 ? sys.A.eigenvalues().cwiseAbs().maxCoeff() : 0.0;
+  if (radius < 1.0) {
+    const Eigen::MatrixXd z = simulate_states(sys, u).transpose();  // n x N, zero initial state
+    Eigen::MatrixXd ak = Eigen::MatrixXd::Identity(n, n);
+    for (int p = 0; p < k - 1; ++p) ak = ak * sys.A;
+    // Columns t = k..N-1 start from s = t-k+1 = 1..N-k.
+    const Eigen::MatrixXd dev = xf.middleCols(1, N - kk) - z.middleCols(1, N - kk);
+    xp.rightCols(N - kk).noalias() = ak * dev;
+    xp.rightCols(N - kk) += z.rightCols(N - kk);
+  } else {
+    const Eigen::MatrixXd Bu = sys.B * u.transpose();  // n x N
+    Eigen::VectorXd x(n);
+    for (Eigen::Index t = kk; t < N; ++t) {
+      x = xf.col(t - kk + 1);
+      for (Eigen::Index j = t - kk + 1; j < t; ++j) x = sys.A * x + Bu.col(j);
+      xp.col(t) = x;
+    }
+  }
+  Eigen::MatrixXd yhat = xp.transpose() * sys.C.transpose();
+  yhat.noalias() += u * sys.D.transpose();
+  return yhat;
+}
+
+struct CompareOptions {
+  /// 0 = simulation (the DESIGN.md fit); k >= 1 = k-step-ahead prediction (needs K).
+  int predict_steps = 0;
+  /// true: x0 by estimate_initial_state on this data; false: `x0` below (empty = zero).
+  bool estimate_x0 = true;
+  Eigen::VectorXd x0;
+  /// Samples used by the x0 estimate (estimate_initial_state's max_samples).
+  Eigen::Index x0_max_samples = 2000;
+  /// Means removed before identification (model file input_offset / output_offset);
+  /// empty = zero. compare() subtracts them from u and y and adds output_offset to y_hat.
+  Eigen::VectorXd input_offset, output_offset;
+};
+
+struct CompareResult {
+  Eigen::VectorXd fit_percent;  ///< per output, 100 (1 - ||y - y_hat|| / ||y - mean(y)||)
+  Eigen::MatrixXd y_hat;        ///< N x l, in the units of the data (output offset added back)
+  Eigen::VectorXd x0;           ///< initial state used
+};
+
+namespace detail {
+
+inline void check_offsets(const StateSpace& sys, const CompareOptions& o) {
+  if (o.input_offset.size() != 0 && o.input_offset.size() != sys.inputs())
+    throw std::invalid_argument("compare: need input_offset of size " + std::to_string(sys.inputs()) + " or empty");
+  if (o.output_offset.size() != 0 && o.output_offset.size() != sys.outputs())
+    throw std::invalid_argument("compare: need output_offset of size " + std::to_string(sys.outputs()) + " or empty");
+  if (o.predict_steps < 0) throw std::invalid_argument("compare: need predict_steps >= 0");
+}
+
+}  // namespace detail
+
+/// Purpose: fit of a model on one experiment, by simulation (predict_steps = 0) or
+/// k-step prediction, with x0 estimated on the same data or given.
+/// Method: offsets removed; x0 by estimate_initial_state (the simulation-error
+/// optimal x0, also used to start the predictor); simulate or predict_k_step;
+/// fit_percent.
+/// Preconditions: sys discrete; data.u N x m, data.y N x l; K n x l when
+/// predict_steps > 0 (std::invalid_argument "compare: k-step prediction needs the
+/// Kalman gain K" when it is empty); offsets of size m, l or empty.
+/// Example: `CompareResult r = compare(model, K, data.experiments[0], {.predict_steps = 1});`
+inline CompareResult compare(const StateSpace& sys, const Eigen::MatrixXd& K, const Experiment& data, const CompareOptions& options = {}) {
+  detail::check_offsets(sys, options);
+  if (data.u.rows() != data.y.rows()) throw std::invalid_argument("compare: u and y differ in length");
+  if (data.u.cols() != sys.inputs() || data.y.cols() != sys.outputs())
+    throw std::invalid_argument("compare: data has " + std::to_string(data.u.cols()) + " input(s) and " +
+                                std::to_string(data.y.cols()) + " output(s), the model " + std::to_string(sys.inputs()) +
+                                " and " + std::to_string(sys.outputs()));
+  if (options.predict_steps > 0 && K.size() == 0)
+    throw std::invalid_argument("compare: k-step prediction needs the Kalman gain K (the model has none)");
+  Eigen::MatrixXd u = data.u, y = data.y;
+  if (options.input_offset.size() != 0) u.rowwise() -= options.input_offset.transpose();
+  if (options.output_offset.size() != 0) y.rowwise() -= options.output_offset.transpose();
+
+  CompareResult r;
+  if (options.estimate_x0)
+    r.x0 = estimate_initial_state(sys, u, y, options.x0_max_samples);
+  else
+    r.x0 = options.x0.size() == 0 ? Eigen::VectorXd(Eigen::VectorXd::Zero(sys.order())) : options.x0;
+  r.y_hat = options.predict_steps == 0 ? simulate(sys, u, r.x0) : predict_k_step(sys, K, u, y, options.predict_steps, r.x0);
+  r.fit_percent = fit_percent(y, r.y_hat);
+  if (options.output_offset.size() != 0) r.y_hat.rowwise() += options.output_offset.transpose();
+  return r;
+}
+
+/// Purpose: the fit over every experiment of a data set (each with its own x0),
+/// computed on the concatenated outputs (so a long record weighs more).
+/// Preconditions: as compare(); options.estimate_x0 or one x0 for all experiments.
+inline Eigen::VectorXd compare_fit(const StateSpace& sys, const Eigen::MatrixXd& K, const IoData& data,
+                                   const CompareOptions& options = {}) {
+  data.validate();
+  const Eigen::Index total = data.total_samples(), l = data.outputs();
+  Eigen::MatrixXd y_all(total, l), yh_all(total, l);
+  Eigen::Index row = 0;
+  for (const Experiment& e : data.experiments) {
+    const CompareResult r = compare(sys, K, e, options);
+    y_all.middleRows(row, e.samples()) = e.y;
+    yh_all.middleRows(row, e.samples()) = r.y_hat;
+    row += e.samples();
+  }
+  return fit_percent(y_all, yh_all);
+}
+
+}  // namespace sysid

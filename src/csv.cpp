@@ -1,0 +1,509 @@
+#include "sysid/io/csv.hpp"
+
+#include <fast_float/fast_float.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <unordered_set>
+
+#include "sysid/core/errors.hpp"
+#include "sysid/io/atomic_file.hpp"
+
+namespace sysid {
+namespace {
+
+enum class Delimiter { comma, tab, whitespace };
+
+inline bool is_blank(char c) { return c == ' ' || c == '\t'; }
+
+/// Field text for an error message: trimmed, and cut so a runaway line (a binary
+/// file, a missing newline) does not flood the terminal.
+std::string excerpt(const char* b, const char* e) {
+  constexpr std::ptrdiff_t max_len = 40;
+  if (e - b > max_len) return std::string(b, b + max_len) + "...";
+  return std::string(b, e);
+}
+
+/// Parses one number occupying exactly [b, e) (already trimmed). Returns false
+/// when the text is not a number. A leading '+' is accepted (std::from_chars and
+/// fast_float reject it, but loggers write it).
+inline bool parse_number(const char* b, const char* e, double& v) {
+  if (b < e && *b == '+') {
+    ++b;
+    if (b < e && (*b == '-' || *b == '+')) return false;
+  }
+  if (b == e) return false;
+  const auto r = fast_float::from_chars(b, e, v);
+  return r.ec == std::errc() && r.ptr == e;
+}
+
+class CsvParser {
+ public:
+  CsvParser(const char* begin, const char* end, const std::string& source) : m_p(begin), m_end(end), m_source(source) {
+    // UTF-8 byte-order mark, as written by Excel and some Windows tools.
+    if (m_end - m_p >= 3 && static_cast<unsigned char>(m_p[0]) == 0xEF && static_cast<unsigned char>(m_p[1]) == 0xBB &&
+        static_cast<unsigned char>(m_p[2]) == 0xBF)
+      m_p += 3;
+  }
+
+  CsvTable parse() {
+    CsvTable table;
+    table.source = m_source;
+    const char* b;
+    const char* e;
+    if (!next_content_line(b, e)) throw DataError(m_source, 0, 0, "empty file: no header row");
+    table.header_line = m_line;
+    parse_header(b, e, table.names);
+    m_columns = table.names.size();
+
+    // Parse straight into the column-major result, sized from an upper bound on
+    // the number of data rows: the newline count (memchr runs an order of magnitude
+    // faster than parsing), capped by the bytes a row needs at least (one per
+    // field, counting delimiters and the line end), so a file of blank lines cannot
+    // make it allocate much more than 8 bytes per byte of text. When there are no
+    // blank or comment lines among the data the bound is exact and no copy is made.
+    const auto rest = static_cast<std::size_t>(m_end - m_p);
+    std::size_t newlines = 0;
+    for (const char* q = m_p; (q = static_cast<const char*>(std::memchr(q, '\n', static_cast<std::size_t>(m_end - q))));
+         ++q)
+      ++newlines;
+    const std::size_t line_bound = newlines + (rest > 0 && m_end[-1] != '\n' ? 1 : 0);
+    m_capacity = static_cast<Eigen::Index>(std::min(line_bound, rest / m_columns + 1));
+    table.values.resize(m_capacity, static_cast<Eigen::Index>(m_columns));
+    table.line_numbers.reserve(static_cast<std::size_t>(m_capacity));
+
+    Eigen::Index rows = 0;
+    while (next_content_line(b, e)) {
+      if (rows == m_capacity) {  // cannot happen (the bound is an upper bound); kept for safety
+        m_capacity = 2 * m_capacity + 1;
+        table.values.conservativeResize(m_capacity, Eigen::NoChange);
+      }
+      double* row = table.values.data() + rows;  // element (rows, 0); columns are m_capacity apart
+      if (m_delimiter == Delimiter::whitespace)
+        parse_row_whitespace(b, e, row);
+      else
+        parse_row_delimited(b, e, row, m_delimiter == Delimiter::comma ? ',' : '\t');
+      table.line_numbers.push_back(m_line);
+      ++rows;
+    }
+    if (rows == 0) throw DataError(m_source, table.header_line, 0, "no data rows after the header");
+    if (rows < m_capacity) table.values = table.values.topRows(rows).eval();
+    return table;
+  }
+
+ private:
+  /// Advances to the next line that is neither blank nor a comment; [b, e) is its
+  /// content without the line end. Returns false at the end of the text.
+  bool next_content_line(const char*& b, const char*& e) {
+    while (m_p < m_end) {
+      ++m_line;
+      const char* nl = static_cast<const char*>(std::memchr(m_p, '\n', static_cast<std::size_t>(m_end - m_p)));
+      const char* line_end = nl ? nl : m_end;
+      b = m_p;
+      e = line_end;
+      m_p = nl ? nl + 1 : m_end;
+      if (e > b && e[-1] == '\r') --e;
+      const char* q = b;
+      while (q < e && is_blank(*q)) ++q;
+      if (q == e || *q == '#') continue;
+      return true;
+    }
+    return false;
+  }
+
+  [[noreturn]] void fail(std::size_t field, const std::string& message) const {
+    throw DataError(m_source, m_line, static_cast<long>(field + 1), message);
+  }
+
+  void parse_header(const char* b, const char* e, std::vector<std::string>& names) {
+    if (std::memchr(b, ',', static_cast<std::size_t>(e - b)))
+      m_delimiter = Delimiter::comma;
+    else if (std::memchr(b, '\t', static_cast<std::size_t>(e - b)))
+      m_delimiter = Delimiter::tab;
+    else
+      m_delimiter = Delimiter::whitespace;
+
+    std::vector<std::pair<const char*, const char*>> fields;
+    if (m_delimiter == Delimiter::whitespace) {
+      const char* q = b;
+      for (;;) {
+        while (q < e && is_blank(*q)) ++q;
+        if (q == e) break;
+        const char* f = q;
+        while (q < e && !is_blank(*q)) ++q;
+        fields.emplace_back(f, q);
+      }
+    } else {
+      const char delim = m_delimiter == Delimiter::comma ? ',' : '\t';
+      const char* q = b;
+      for (;;) {
+        const char* f = q;
+        while (q < e && *q != delim) ++q;
+        const char* fb = f;
+        const char* fe = q;
+        while (fb < fe && is_blank(*fb)) ++fb;
+        while (fe > fb && is_blank(fe[-1])) --fe;
+        fields.emplace_back(fb, fe);
+        if (q == e) break;
+        ++q;
+      }
+    }
+
+    std::unordered_set<std::string> seen;
+    bool all_numbers = true;
+    for (std::size_t k = 0; k < fields.size(); ++k) {
+      auto [fb, fe] = fields[k];
+      double dummy;
+      all_numbers = all_numbers && parse_number(fb, fe, dummy);
+      if (fe - fb >= 2 && *fb == '"' && fe[-1] == '"') {
+        ++fb;
+        --fe;
+      }
+      if (fb == fe) fail(k, "empty column name in the header row");
+      std::string name(fb, fe);
+      if (!seen.insert(name).second) fail(k, "duplicate column name '" + name + "'");
+      names.push_back(std::move(name));
+    }
+    if (all_numbers)
+      fail(0, "the first line holds numbers, expected a header row of column names (e.g. t,u,y)");
+  }
+
+  [[noreturn]] void fail_count(std::size_t found) const {
+    const std::size_t first_bad = std::min(found, m_columns);  // first missing or first extra field
+    fail(first_bad, "expected " + std::to_string(m_columns) + " fields, found " + std::to_string(found));
+  }
+
+  /// Comma or tab: the hot loop. The common case (a number right at the field
+  /// start followed by the delimiter) costs one fast_float call and one compare;
+  /// spaces, '+', empty cells and errors take the slower branches.
+  void parse_row_delimited(const char* q, const char* e, double* row, char delim) {
+    std::size_t col = 0;
+    for (;; ++col) {
+      while (q < e && *q == ' ') ++q;
+      if (delim != '\t')
+        while (q < e && is_blank(*q)) ++q;
+      double v;
+      if (q == e || *q == delim) {
+        v = std::numeric_limits<double>::quiet_NaN();  // empty cell
+      } else {
+        const char* f = q;
+        auto r = fast_float::from_chars(q, e, v);
+        if (r.ec == std::errc() && (r.ptr == e || *r.ptr == delim)) {
+          q = r.ptr;
+        } else {
+          // Slow path: find the whole field, trim it, retry (handles '+' and
+          // trailing spaces), else report it.
+          while (q < e && *q != delim) ++q;
+          const char* fe = q;
+          while (fe > f && is_blank(fe[-1])) --fe;
+          if (!parse_number(f, fe, v)) {
+            if (col >= m_columns) fail_count(count_fields_from(col, q, e, delim));
+            fail(col, "expected a number, found '" + excerpt(f, fe) + "'");
+          }
+        }
+      }
+      if (col >= m_columns) fail_count(count_fields_from(col, q, e, delim));
+      row[static_cast<Eigen::Index>(col) * m_capacity] = v;
+      if (q == e) break;
+      ++q;  // the delimiter
+    }
+    if (col + 1 != m_columns) fail_count(col + 1);
+  }
+
+  /// Number of fields in the row, given that field `col` ends at q.
+  static std::size_t count_fields_from(std::size_t col, const char* q, const char* e, char delim) {
+    return col + 1 + static_cast<std::size_t>(std::count(q, e, delim));
+  }
+
+  void parse_row_whitespace(const char* q, const char* e, double* row) {
+    std::size_t col = 0;
+    for (;;) {
+      while (q < e && is_blank(*q)) ++q;
+      if (q == e) break;
+      const char* f = q;
+      double v;
+      auto r = fast_float::from_chars(q, e, v);
+      if (r.ec == std::errc() && (r.ptr == e || is_blank(*r.ptr))) {
+        q = r.ptr;
+      } else {
+        while (q < e && !is_blank(*q)) ++q;
+        if (!parse_number(f, q, v)) {
+          if (col >= m_columns) fail_count(count_whitespace_fields_from(col, q, e));
+          fail(col, "expected a number, found '" + excerpt(f, q) + "'");
+        }
+      }
+      if (col >= m_columns) fail_count(count_whitespace_fields_from(col, q, e));
+      row[static_cast<Eigen::Index>(col++) * m_capacity] = v;
+    }
+    if (col != m_columns) fail_count(col);
+  }
+
+  static std::size_t count_whitespace_fields_from(std::size_t col, const char* q, const char* e) {
+    std::size_t n = col + 1;
+    for (;;) {
+      while (q < e && is_blank(*q)) ++q;
+      if (q == e) return n;
+      ++n;
+      while (q < e && !is_blank(*q)) ++q;
+    }
+  }
+
+  const char* m_p;
+  const char* m_end;
+  const std::string& m_source;
+  long m_line = 0;
+  Delimiter m_delimiter = Delimiter::comma;
+  std::size_t m_columns = 0;
+  Eigen::Index m_capacity = 0;  ///< allocated rows of the result (column stride)
+};
+
+std::string format_seconds(double x) {
+  std::ostringstream s;
+  s.precision(6);
+  s << x;
+  return s.str();
+}
+
+std::string join(const std::vector<std::string>& names) {
+  std::string s;
+  for (std::size_t k = 0; k < names.size(); ++k) s += (k ? ", " : "") + names[k];
+  return s;
+}
+
+}  // namespace
+
+Eigen::Index CsvTable::column(const std::string& name) const {
+  const auto it = std::find(names.begin(), names.end(), name);
+  return it == names.end() ? -1 : static_cast<Eigen::Index>(it - names.begin());
+}
+
+CsvTable read_csv_string(const std::string& text, const std::string& source_name) {
+  return CsvParser(text.data(), text.data() + text.size(), source_name).parse();
+}
+
+CsvTable read_csv(const std::string& path) {
+  const std::string text = read_whole_file(path);
+  return read_csv_string(text, path);
+}
+
+IoData log_from_table(const CsvTable& table, const LogOptions& options) {
+  if (options.inputs.empty() && options.outputs.empty())
+    throw std::invalid_argument("read_log: need at least one input or output column (inputs.size() + outputs.size() >= 1)");
+  if (options.ts && !(*options.ts > 0.0 && std::isfinite(*options.ts)))
+    throw std::invalid_argument("read_log: need ts > 0 (sample time in seconds)");
+  if (!(options.time_tolerance >= 0.0)) throw std::invalid_argument("read_log: need time_tolerance >= 0");
+
+  const std::string& src = table.source;
+  auto find_column = [&](const std::string& name) {
+    const Eigen::Index c = table.column(name);
+    if (c < 0)
+      throw DataError(src, table.header_line, 0, "no column '" + name + "'; the columns are: " + join(table.names));
+    return c;
+  };
+  std::vector<std::string> seen;
+  for (const auto* list : {&options.inputs, &options.outputs})
+    for (const auto& name : *list) {
+      if (std::find(seen.begin(), seen.end(), name) != seen.end())
+        throw std::invalid_argument("read_log: column '" + name + "' selected twice");
+      seen.push_back(name);
+    }
+
+  // One copy of the selected columns, straight into the matrices handed to IoData.
+  const Eigen::Index n_rows = table.values.rows();
+  const auto m = static_cast<Eigen::Index>(options.inputs.size());
+  const auto l = static_cast<Eigen::Index>(options.outputs.size());
+  Eigen::MatrixXd u(n_rows, m), y(n_rows, l);
+  Eigen::VectorXd t;
+  // Every selected column as (data, file column), so the NaN policy treats inputs,
+  // outputs and time alike.
+  std::vector<std::pair<double*, Eigen::Index>> sel;
+  for (Eigen::Index j = 0; j < m; ++j) {
+    const Eigen::Index c = find_column(options.inputs[static_cast<std::size_t>(j)]);
+    u.col(j) = table.values.col(c);
+    sel.emplace_back(u.col(j).data(), c);
+  }
+  for (Eigen::Index i = 0; i < l; ++i) {
+    const Eigen::Index c = find_column(options.outputs[static_cast<std::size_t>(i)]);
+    y.col(i) = table.values.col(c);
+    sel.emplace_back(y.col(i).data(), c);
+  }
+  const Eigen::Index time_col = options.time_column.empty() ? -1 : table.column(options.time_column);
+  std::size_t time_sel = sel.size();  // index into sel of the time column
+  if (time_col >= 0) {
+    const auto it = std::find_if(sel.begin(), sel.end(), [&](const auto& s) { return s.second == time_col; });
+    if (it != sel.end()) {
+      time_sel = static_cast<std::size_t>(it - sel.begin());  // also selected as a signal: one copy serves both
+    } else {
+      t = table.values.col(time_col);
+      sel.emplace_back(t.data(), time_col);
+    }
+  }
+
+  const std::vector<long>& lines = table.line_numbers;
+  // A non-finite cell of selected column k in row r, at its file line and column.
+  auto bad_cell = [&](Eigen::Index r, std::size_t k, const std::string& why) {
+    const Eigen::Index c = sel[k].second;
+    return DataError(src, lines[static_cast<std::size_t>(r)], static_cast<long>(c + 1),
+                     std::string(std::isnan(sel[k].first[r]) ? "NaN or empty cell" : "Inf") + " in column '" +
+                         table.names[static_cast<std::size_t>(c)] + "'" + why);
+  };
+  auto column_finite = [&](std::size_t k) { return Eigen::Map<const Eigen::VectorXd>(sel[k].first, n_rows).allFinite(); };
+  auto row_finite = [&](Eigen::Index r) {
+    return std::all_of(sel.begin(), sel.end(), [r](const auto& s) { return std::isfinite(s.first[r]); });
+  };
+  bool all_finite = true;
+  for (std::size_t k = 0; k < sel.size(); ++k) all_finite = all_finite && column_finite(k);
+
+  Eigen::Index first = 0, last = n_rows;  // rows kept
+  if (!all_finite) {
+    switch (options.nan_policy) {
+      case NanPolicy::error:
+        // Row by row, so the first problem in file order is reported.
+        for (Eigen::Index r = 0; r < n_rows; ++r)
+          for (std::size_t k = 0; k < sel.size(); ++k)
+            if (!std::isfinite(sel[k].first[r])) throw bad_cell(r, k, " (choose a NaN policy to drop or interpolate)");
+        break;
+      case NanPolicy::drop_rows:
+        while (first < n_rows && !row_finite(first)) ++first;
+        if (first == n_rows) throw DataError(src, 0, 0, "every row has a NaN or Inf in the selected columns");
+        while (last > first && !row_finite(last - 1)) --last;
+        for (Eigen::Index r = first; r < last; ++r)
+          if (!row_finite(r)) {
+            std::size_t k = 0;
+            while (std::isfinite(sel[k].first[r])) ++k;
+            throw bad_cell(r, k,
+                           " inside the record: dropping the row would make the sampling non-uniform "
+                           "(drop_rows only trims leading and trailing rows; use interpolate)");
+          }
+        break;
+      case NanPolicy::interpolate:
+        for (std::size_t k = 0; k < sel.size(); ++k) {
+          double* x = sel[k].first;
+          for (Eigen::Index r = 0; r < n_rows; ++r) {
+            if (std::isfinite(x[r])) continue;
+            Eigen::Index end = r;
+            while (end < n_rows && !std::isfinite(x[end])) ++end;
+            if (r == 0 || end == n_rows)
+              throw bad_cell(r, k,
+                             std::string(" at the ") + (r == 0 ? "start" : "end") +
+                                 " of the record: nothing to interpolate from (use drop_rows to trim it)");
+            const double a = x[r - 1], b = x[end];
+            const double span = static_cast<double>(end - r + 1);
+            for (Eigen::Index i = r; i < end; ++i) x[i] = a + (b - a) * static_cast<double>(i - r + 1) / span;
+            r = end;
+          }
+        }
+        break;
+    }
+  }
+  const Eigen::Index n = last - first;
+  auto line_of = [&](Eigen::Index r) { return lines[static_cast<std::size_t>(first + r)]; };  // r: kept row
+
+  double ts = 0.0;
+  if (time_col >= 0) {
+    const double* tk = sel[time_sel].first + first;
+    if (n < 2)
+      throw DataError(src, line_of(0), static_cast<long>(time_col + 1),
+                      "need at least 2 samples to find the sample time from column '" + options.time_column + "'");
+    std::vector<double> steps(static_cast<std::size_t>(n - 1));
+    for (Eigen::Index r = 1; r < n; ++r) {
+      steps[static_cast<std::size_t>(r - 1)] = tk[r] - tk[r - 1];
+      if (!(tk[r] > tk[r - 1]))
+        throw DataError(src, line_of(r), static_cast<long>(time_col + 1),
+                        "time stamps not increasing: " + format_seconds(tk[r]) + " s after " + format_seconds(tk[r - 1]) +
+                            " s");
+    }
+    std::vector<double> sorted = steps;
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+    const double median = sorted[sorted.size() / 2];
+    for (Eigen::Index r = 1; r < n; ++r) {
+      const double step = steps[static_cast<std::size_t>(r - 1)];
+      if (std::abs(step - median) > options.time_tolerance * median)
+        throw DataError(src, line_of(r), static_cast<long>(time_col + 1),
+                        "non-uniform time stamps: step " + format_seconds(step) + " s at line " +
+                            std::to_string(line_of(r)) + ", expected " + format_seconds(median) + " s");
+    }
+    ts = (tk[n - 1] - tk[0]) / static_cast<double>(n - 1);
+    if (options.ts && std::abs(*options.ts - ts) > options.time_tolerance * *options.ts)
+      throw DataError(src, 0, 0,
+                      "time column '" + options.time_column + "' gives a sample time of " + format_seconds(ts) +
+                          " s but " + format_seconds(*options.ts) + " s was given");
+  } else if (options.ts) {
+    ts = *options.ts;
+  } else {
+    throw DataError(src, 0, 0, "no time column '" + options.time_column + "' and no --ts given");
+  }
+
+  if (first > 0 || last < n_rows) {
+    u = u.middleRows(first, n).eval();
+    y = y.middleRows(first, n).eval();
+  }
+  return IoData(std::move(u), std::move(y), ts, options.inputs, options.outputs, src);
+}
+
+IoData read_log(const std::string& path, const LogOptions& options) { return log_from_table(read_csv(path), options); }
+
+IoData read_logs(const std::vector<std::string>& paths, const LogOptions& options) {
+  if (paths.empty()) throw std::invalid_argument("read_logs: need at least one file (paths.size() >= 1)");
+  IoData all = read_log(paths.front(), options);
+  for (std::size_t k = 1; k < paths.size(); ++k) {
+    IoData next = read_log(paths[k], options);
+    if (std::abs(next.Ts - all.Ts) > options.time_tolerance * all.Ts)
+      throw DataError(paths[k], 0, 0,
+                      "sample time " + format_seconds(next.Ts) + " s differs from " + format_seconds(all.Ts) + " s of " +
+                          paths.front());
+    all.add_experiment(std::move(next.experiments.front()));
+  }
+  return all;
+}
+
+std::string format_csv(const std::vector<std::string>& names, const Eigen::MatrixXd& values) {
+  if (static_cast<Eigen::Index>(names.size()) != values.cols())
+    throw std::invalid_argument("format_csv: need names.size() == values.cols(), have " + std::to_string(names.size()) +
+                                " names for " + std::to_string(values.cols()) + " columns");
+  if (names.empty()) throw std::invalid_argument("format_csv: need at least one column");
+  std::unordered_set<std::string> seen;
+  bool all_numbers = true;
+  for (const auto& n : names) {
+    if (n.empty()) throw std::invalid_argument("format_csv: empty column name");
+    if (n.find_first_of(",\"\r\n") != std::string::npos || n.front() == '#' || is_blank(n.front()) || is_blank(n.back()))
+      throw std::invalid_argument("format_csv: column name '" + n +
+                                  "' cannot be written (no ',', '\"', line breaks, leading '#' or surrounding spaces)");
+    if (names.size() == 1 && n.find_first_of(" \t") != std::string::npos)
+      throw std::invalid_argument("format_csv: a single column name cannot contain spaces ('" + n + "')");
+    if (!seen.insert(n).second) throw std::invalid_argument("format_csv: duplicate column name '" + n + "'");
+    double dummy;
+    all_numbers = all_numbers && parse_number(n.data(), n.data() + n.size(), dummy);
+  }
+  if (all_numbers) throw std::invalid_argument("format_csv: column names must not all be numbers");
+
+  std::string out;
+  // ~24 bytes is the longest shortest-round-trip double ("-2.2250738585072014e-308").
+  out.reserve(static_cast<std::size_t>(values.size()) * 24 + 64);
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    if (k) out += ',';
+    out += names[k];
+  }
+  out += '\n';
+  char buf[64];
+  for (Eigen::Index r = 0; r < values.rows(); ++r) {
+    for (Eigen::Index c = 0; c < values.cols(); ++c) {
+      if (c) out += ',';
+      const auto res = std::to_chars(buf, buf + sizeof buf, values(r, c));
+      out.append(buf, res.ptr);
+    }
+    out += '\n';
+  }
+  return out;
+}
+
+void write_csv(const std::string& path, const std::vector<std::string>& names, const Eigen::MatrixXd& values) {
+  write_file_atomically(path, format_csv(names, values));
+}
+
+}  // namespace sysid

@@ -1,0 +1,198 @@
+// End-to-end: sysid n4sid on logs made with sysid excite + sysid simulate from a
+// known 4th-order plant (modes 50 Hz / zeta 0.02 and 120 Hz / zeta 0.05, 1 kHz),
+// with 1 % output noise added here.
+#include <sysid/core/modal_table.hpp>
+#include <sysid/io/model_json.hpp>
+
+#include <gtest/gtest.h>
+
+#include <map>
+#include <memory>
+#include <regex>
+
+#include "run_cli.hpp"
+
+using namespace sysid;
+using namespace sysid::test;
+
+namespace {
+
+/// Input made by `sysid excite` (broadband multisine), output by `sysid simulate`,
+/// then white noise of `noise` times the output RMS added to y; written as t,u,y.
+void make_log(const TempDir& dir, const std::string& stem, int seed, double noise, int samples = 4000) {
+  const std::string u_csv = dir / (stem + "_u.csv"), y_csv = dir / (stem + "_y.csv");
+  CliResult r = run_cli({"excite", "--signal", "multisine", "--fs", "1000", "--band", "0:499", "--samples",
+                         std::to_string(samples), "--seed", std::to_string(seed), "--out", u_csv});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  r = run_cli({"simulate", dir / "plant.json", u_csv, "--out", y_csv});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  const Eigen::VectorXd t = csv_column(u_csv, "t"), u = csv_column(u_csv, "u");
+  Eigen::VectorXd y = csv_column(y_csv, "y");
+  const double rms = std::sqrt(y.squaredNorm() / static_cast<double>(y.size()));
+  y += gaussian(y.size(), 1, static_cast<std::uint64_t>(1000 + seed), noise * rms).col(0);
+  Eigen::MatrixXd table(t.size(), 3);
+  table << t, u, y;
+  write_csv(dir / (stem + ".csv"), {"t", "u", "y"}, table);
+}
+
+int printed_order(const std::string& out) {
+  std::smatch m;
+  static const std::regex re(R"((?:^|\n)order: (\d+) \()");
+  return std::regex_search(out, m, re) ? std::stoi(m[1]) : -1;
+}
+
+class N4sidApp : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    s_dir = std::make_unique<TempDir>();
+    write_model(*s_dir / "plant.json", four_mode_plant());
+    make_log(*s_dir, "log", 1, 0.01);
+    make_log(*s_dir, "fresh", 2, 0.01);
+  }
+  static void TearDownTestSuite() { s_dir.reset(); }
+  static std::string path(const std::string& f) { return *s_dir / f; }
+
+  /// Simulation fit of a model file on the fresh log, via sysid compare.
+  static double fresh_fit(const std::string& model) {
+    const CliResult r = run_cli({"compare", model, path("fresh.csv"), "--inputs", "u", "--outputs", "y"});
+    EXPECT_EQ(r.exit_code, 0) << describe(r);
+    return fit_after(r.out, "fit [%]", "y");
+  }
+
+  static inline std::unique_ptr<TempDir> s_dir;
+};
+
+}  // namespace
+
+TEST_F(N4sidApp, AutoOrderPicksFourAndFitsFreshData) {
+  const std::string model = path("auto.json");
+  const CliResult r = run_cli({"n4sid", path("log.csv"), "--inputs", "u", "--outputs", "y", "--order", "auto", "--out", model});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_EQ(printed_order(r.out), 4) << r.out;
+  EXPECT_NE(r.out.find("largest singular-value gap"), std::string::npos) << r.out;  // the rule that chose it
+  EXPECT_NE(r.out.find("leading singular values (10 of"), std::string::npos) << r.out;  // 2 * order + 2
+  EXPECT_NE(r.out.find("excited band:"), std::string::npos);
+  EXPECT_NE(r.out.find("freq [Hz]"), std::string::npos);  // modal table
+  EXPECT_GT(fit_after(r.out, "fit on estimation data", "y"), 95.0) << r.out;
+  ASSERT_TRUE(std::filesystem::exists(model));
+
+  // The model is good on data it never saw (1 % noise: the best possible fit is ~99).
+  EXPECT_GT(fresh_fit(model), 95.0);
+
+  // Basis-invariant check of the identified physics: the two modes.
+  const ModelFile f = read_model_json(model);
+  const std::vector<Mode> modes = modal_table(f.model);
+  ASSERT_EQ(modes.size(), 2u);
+  EXPECT_NEAR(modes[0].freq_hz, 50.0, 0.5);
+  EXPECT_NEAR(modes[0].damping, 0.02, 0.004);
+  EXPECT_NEAR(modes[1].freq_hz, 120.0, 1.0);
+  EXPECT_NEAR(modes[1].damping, 0.05, 0.01);
+
+  // Model file contents: innovation model with offsets, names and provenance.
+  EXPECT_EQ(f.K.rows(), 4);
+  EXPECT_EQ(f.noise_covariance.rows(), 1);
+  EXPECT_EQ(f.x0.size(), 4);
+  EXPECT_EQ(f.input_offset.size(), 1);
+  EXPECT_EQ(f.output_offset.size(), 1);
+  EXPECT_EQ(f.model.input_names, std::vector<std::string>{"u"});
+  EXPECT_EQ(f.model.output_names, std::vector<std::string>{"y"});
+  const nlohmann::json& p = f.provenance;
+  EXPECT_EQ(p.at("method"), "n4sid");
+  EXPECT_EQ(p.at("order"), 4);
+  EXPECT_TRUE(p.at("order_rule").is_string());
+  EXPECT_GE(p.at("horizon").get<int>(), 2);
+  EXPECT_EQ(p.at("data"), path("log.csv"));
+  ASSERT_TRUE(p.at("fit_percent").is_array());
+  EXPECT_GT(p.at("fit_percent")[0].get<double>(), 95.0);
+  EXPECT_GT(p.at("singular_values").size(), 8u);
+  ASSERT_EQ(p.at("excited_band_hz").size(), 2u);
+  EXPECT_GT(p.at("excited_band_hz")[1].get<double>(), 400.0);
+  EXPECT_TRUE(p.at("hankel_route").is_string());
+  EXPECT_TRUE(p.at("sysid_version").is_string());
+  EXPECT_FALSE(p.contains("validation"));  // no validation data given
+}
+
+TEST_F(N4sidApp, SplitValidatesOnTheHeldOutSamples) {
+  const std::string model = path("split.json");
+  const CliResult r =
+      run_cli({"n4sid", path("log.csv"), "--inputs", "u", "--outputs", "y", "--split", "0.7", "--out", model});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_EQ(printed_order(r.out), 4) << r.out;
+  const double val = fit_after(r.out, "fit on validation data", "y");
+  EXPECT_GT(val, 95.0) << r.out;
+  EXPECT_NE(r.out.find("last 30% of samples"), std::string::npos) << r.out;
+  const ModelFile f = read_model_json(model);
+  EXPECT_EQ(f.provenance.at("validation"), "last 30% of samples");
+  EXPECT_NEAR(f.provenance.at("validation_fit_percent")[0].get<double>(), val, 0.006);  // printed with 2 decimals
+  EXPECT_GT(fresh_fit(model), 95.0);
+}
+
+TEST_F(N4sidApp, ValidateFileReportsTheFitOnThatFile) {
+  const std::string model = path("validate.json");
+  const CliResult r = run_cli(
+      {"n4sid", path("log.csv"), "--inputs", "u", "--outputs", "y", "--validate", path("fresh.csv"), "--out", model});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  const double val = fit_after(r.out, "fit on validation data", "y");
+  EXPECT_GT(val, 95.0) << r.out;
+  const ModelFile f = read_model_json(model);
+  EXPECT_EQ(f.provenance.at("validation"), path("fresh.csv"));
+  // The validation fit is what sysid compare reports on the same file.
+  EXPECT_NEAR(val, fresh_fit(model), 0.011);
+}
+
+TEST_F(N4sidApp, OrderRangePrintsTheTableAndWritesTheBest) {
+  const std::string model = path("sweep.json");
+  const CliResult r = run_cli(
+      {"n4sid", path("log.csv"), "--inputs", "u", "--outputs", "y", "--order", "2:6", "--split", "0.7", "--out", model});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  // Rows "order  est y  val y".
+  std::map<int, std::pair<double, double>> rows;
+  static const std::regex row_re(R"(\n\s+(\d+)\s+(-?[\d.]+)\s+(-?[\d.]+)(?=\n))");
+  for (auto it = std::sregex_iterator(r.out.begin(), r.out.end(), row_re); it != std::sregex_iterator(); ++it)
+    rows[std::stoi((*it)[1])] = {std::stod((*it)[2]), std::stod((*it)[3])};
+  ASSERT_EQ(rows.size(), 5u) << r.out;
+  for (int n = 2; n <= 6; ++n) EXPECT_TRUE(rows.count(n)) << n;
+  // Order 2 misses a mode; 4 is right; more states than 4 buy nothing but noise.
+  EXPECT_GT(rows[4].second, rows[2].second + 10.0) << r.out;
+  EXPECT_NEAR(rows[6].second, rows[4].second, 1.5) << r.out;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.out, m, std::regex(R"(best mean validation fit: order (\d+))"))) << r.out;
+  const int best = std::stoi(m[1]);
+  EXPECT_GE(best, 4);
+  for (const auto& [n, fits] : rows) EXPECT_LE(fits.second, rows[best].second) << n;
+  const ModelFile f = read_model_json(model);
+  EXPECT_EQ(f.model.order(), best);
+  EXPECT_EQ(f.provenance.at("order"), best);
+  EXPECT_EQ(f.provenance.at("order_sweep").size(), 5u);
+  EXPECT_GT(fresh_fit(model), 95.0);
+}
+
+TEST_F(N4sidApp, MoespAndCvaWeightingsWork) {
+  for (const std::string method : {"moesp", "cva"}) {
+    const std::string model = path(method + ".json");
+    const CliResult r =
+        run_cli({"n4sid", path("log.csv"), "--inputs", "u", "--outputs", "y", "--method", method, "--order", "4", "--out", model});
+    ASSERT_EQ(r.exit_code, 0) << describe(r);
+    EXPECT_NE(r.out.find(method + ": order 4"), std::string::npos) << r.out;  // brief report names the weighting
+    EXPECT_EQ(read_model_json(model).provenance.at("method"), method);
+    EXPECT_GT(fresh_fit(model), 95.0) << method;
+  }
+}
+
+TEST_F(N4sidApp, HelpHasAnExample) {
+  const CliResult r = run_cli({"n4sid", "--help"});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_NE(r.out.find("Example"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("sysid n4sid log.csv --inputs"), std::string::npos) << r.out;
+  for (const char* option : {"--inputs", "--outputs", "--ts", "--nan-policy", "--method", "--order", "--max-order",
+                             "--order-rule", "--horizon", "--enforce-stability", "--hankel", "--validate", "--split", "--out"})
+    EXPECT_NE(r.out.find(option), std::string::npos) << option;
+}
+
+TEST_F(N4sidApp, SplitAndValidateTogetherAreAUsageError) {
+  const std::string model = path("both.json");
+  const CliResult r = run_cli({"n4sid", path("log.csv"), "--inputs", "u", "--outputs", "y", "--split", "0.5", "--validate",
+                               path("fresh.csv"), "--out", model});
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
+  EXPECT_FALSE(std::filesystem::exists(model));
+}

@@ -1,0 +1,51 @@
+#pragma once
+// Test support: seeded random stable systems and noisy simulated data.
+#include <sysid/core/io_data.hpp>
+#include <sysid/core/state_space.hpp>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+namespace sysid::test {
+
+/// Random stable discrete-time MIMO system with lightly damped modes at given
+/// frequencies (fractions of the sample rate), built in real modal form and
+/// then rotated by a random similarity transform (so A is not block-diagonal).
+inline StateSpace random_modal_system(int modes, int inputs, int outputs, std::uint64_t seed, double damping = 0.05,
+                                      bool feedthrough = true) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> freq(0.02, 0.35), unit(-1.0, 1.0);
+  const int n = 2 * modes;
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
+  for (int k = 0; k < modes; ++k) {
+    const double w = 2 * std::numbers::pi * freq(rng);  // rad/sample
+    const double r = std::exp(-damping * w);
+    a(2 * k, 2 * k) = r * std::cos(w);
+    a(2 * k, 2 * k + 1) = r * std::sin(w);
+    a(2 * k + 1, 2 * k) = -r * std::sin(w);
+    a(2 * k + 1, 2 * k + 1) = r * std::cos(w);
+  }
+  Eigen::MatrixXd t(n, n);
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c) t(r, c) = unit(rng) + (r == c ? 2.0 : 0.0);
+  Eigen::MatrixXd b(n, inputs), c(outputs, n), d(outputs, inputs);
+  for (auto* m : {&b, &c, &d})
+    for (Eigen::Index r = 0; r < m->rows(); ++r)
+      for (Eigen::Index q = 0; q < m->cols(); ++q) (*m)(r, q) = unit(rng);
+  if (!feedthrough) d.setZero();
+  const Eigen::MatrixXd ti = t.inverse();
+  return StateSpace(t * a * ti, t * b, c * ti, d, 1.0);
+}
+
+inline Eigen::MatrixXd white_noise(Eigen::Index n, Eigen::Index cols, std::uint64_t seed, double sigma = 1.0) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0.0, sigma);
+  Eigen::MatrixXd x(n, cols);
+  for (Eigen::Index c = 0; c < cols; ++c)
+    for (Eigen::Index r = 0; r < n; ++r) x(r, c) = g(rng);
+  return x;
+}
+
+}  // namespace sysid::test

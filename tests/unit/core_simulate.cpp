@@ -1,0 +1,143 @@
+// Tests for sysid::simulate / simulate_states (include/sysid/core/simulate.hpp).
+#include <sysid/core/simulate.hpp>
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <random>
+#include <stdexcept>
+
+namespace {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+MatrixXd randn(std::mt19937_64& rng, Eigen::Index r, Eigen::Index c) {
+  std::normal_distribution<double> g;
+  MatrixXd m(r, c);
+  for (Eigen::Index j = 0; j < c; ++j)
+    for (Eigen::Index i = 0; i < r; ++i) m(i, j) = g(rng);
+  return m;
+}
+
+/// Random discrete model with spectral radius `radius` (< 1: stable).
+sysid::StateSpace random_discrete(std::mt19937_64& rng, Eigen::Index n, Eigen::Index m, Eigen::Index l, double radius) {
+  MatrixXd A = randn(rng, n, n);
+  const double rho = A.eigenvalues().cwiseAbs().maxCoeff();
+  A *= radius / rho;
+  return sysid::StateSpace(A, randn(rng, n, m), randn(rng, l, n), randn(rng, l, m), 0.01);
+}
+
+/// The textbook recursion, one sample at a time: the reference.
+MatrixXd reference_output(const sysid::StateSpace& s, const MatrixXd& u, VectorXd x, MatrixXd* states = nullptr) {
+  MatrixXd y(u.rows(), s.outputs());
+  if (states) states->resize(u.rows(), s.order());
+  for (Eigen::Index k = 0; k < u.rows(); ++k) {
+    const VectorXd uk = u.row(k).transpose();
+    if (states) states->row(k) = x.transpose();
+    y.row(k) = (s.C * x + s.D * uk).transpose();
+    x = s.A * x + s.B * uk;
+  }
+  return y;
+}
+
+// Both sides compute the same sums in different association orders; for a stable
+// model the difference is a few eps times the size of the terms, so 1e-12
+// relative to the output scale leaves a wide margin while catching any indexing
+// slip (an off-by-one shifts y by O(1)).
+double rel_diff(const MatrixXd& a, const MatrixXd& b) { return (a - b).cwiseAbs().maxCoeff() / std::max(1.0, b.cwiseAbs().maxCoeff()); }
+
+TEST(CoreSimulate, MatchesHandRolledRecursionSweep) {
+  std::mt19937_64 rng(20240601);
+  for (Eigen::Index n = 1; n <= 12; ++n)
+    for (Eigen::Index m = 1; m <= 3; ++m)
+      for (Eigen::Index l = 1; l <= 3; ++l) {
+        const sysid::StateSpace s = random_discrete(rng, n, m, l, 0.95);
+        const MatrixXd u = randn(rng, 157, m);
+        const VectorXd x0 = randn(rng, n, 1);
+        MatrixXd xref;
+        const MatrixXd yref = reference_output(s, u, x0, &xref);
+        EXPECT_LT(rel_diff(sysid::simulate(s, u, x0), yref), 1e-12) << "n=" << n << " m=" << m << " l=" << l;
+        EXPECT_LT(rel_diff(sysid::simulate_states(s, u, x0), xref), 1e-12) << "n=" << n;
+        // zero initial state by default
+        EXPECT_LT(rel_diff(sysid::simulate(s, u), reference_output(s, u, VectorXd::Zero(n))), 1e-12);
+      }
+}
+
+TEST(CoreSimulate, ImpulseResponseEqualsMarkovParameters) {
+  std::mt19937_64 rng(7);
+  const sysid::StateSpace s = random_discrete(rng, 6, 2, 3, 0.9);
+  const Eigen::Index N = 40;
+  for (Eigen::Index j = 0; j < 2; ++j) {
+    MatrixXd u = MatrixXd::Zero(N, 2);
+    u(0, j) = 1.0;
+    const MatrixXd y = sysid::simulate(s, u);
+    // h_0 = D, h_k = C A^(k-1) B
+    EXPECT_LT((y.row(0).transpose() - s.D.col(j)).norm(), 1e-14);
+    VectorXd Akb = s.B.col(j);
+    for (Eigen::Index k = 1; k < N; ++k) {
+      const VectorXd h = s.C * Akb;
+      EXPECT_LT((y.row(k).transpose() - h).norm(), 1e-12 * std::max(1.0, h.norm())) << "k=" << k;
+      Akb = s.A * Akb;
+    }
+  }
+}
+
+TEST(CoreSimulate, LongRecordCrossesBlockBoundaries) {
+  // Blocks of 4096 samples: the state must carry over exactly between them.
+  std::mt19937_64 rng(11);
+  const sysid::StateSpace s = random_discrete(rng, 5, 2, 2, 0.99);
+  const MatrixXd u = randn(rng, 3 * 4096 + 17, 2);
+  const VectorXd x0 = randn(rng, 5, 1);
+  const MatrixXd yref = reference_output(s, u, x0);
+  const MatrixXd y = sysid::simulate(s, u, x0);
+  EXPECT_LT(rel_diff(y, yref), 1e-11);
+  // output = states C^T + u D^T
+  const MatrixXd X = sysid::simulate_states(s, u, x0);
+  EXPECT_LT(rel_diff(y, X * s.C.transpose() + u * s.D.transpose()), 1e-12);
+}
+
+TEST(CoreSimulate, AcceptsExpressionsAndRowMajorInput) {
+  std::mt19937_64 rng(3);
+  const sysid::StateSpace s = random_discrete(rng, 4, 2, 1, 0.8);
+  const MatrixXd u = randn(rng, 300, 2);
+  const MatrixXd yref = reference_output(s, 2.0 * u, VectorXd::Zero(4));
+  const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> ur = 2.0 * u;
+  EXPECT_LT(rel_diff(sysid::simulate(s, 2.0 * u), yref), 1e-12);
+  EXPECT_LT(rel_diff(sysid::simulate(s, ur), yref), 1e-12);
+  const MatrixXd wide = randn(rng, 300, 5);
+  EXPECT_LT(rel_diff(sysid::simulate(s, wide.middleCols(1, 2)), reference_output(s, wide.middleCols(1, 2), VectorXd::Zero(4))),
+            1e-12);
+}
+
+TEST(CoreSimulate, UnstableModelGrowsLikeTheRecursion) {
+  const sysid::StateSpace s(MatrixXd::Constant(1, 1, 1.1), MatrixXd::Ones(1, 1), MatrixXd::Ones(1, 1), MatrixXd::Zero(1, 1), 1.0);
+  const MatrixXd u = MatrixXd::Zero(50, 1);
+  const MatrixXd y = sysid::simulate(s, u, VectorXd::Ones(1));
+  EXPECT_NEAR(y(49, 0) / std::pow(1.1, 49), 1.0, 1e-13);
+}
+
+TEST(CoreSimulate, StaticGainAndEmptyRecord) {
+  const sysid::StateSpace g(MatrixXd(0, 0), MatrixXd(0, 2), MatrixXd(3, 0), (MatrixXd(3, 2) << 1, 2, 3, 4, 5, 6).finished(), 0.1);
+  std::mt19937_64 rng(5);
+  const MatrixXd u = randn(rng, 20, 2);
+  EXPECT_LT(rel_diff(sysid::simulate(g, u), u * g.D.transpose()), 1e-15);
+  EXPECT_EQ(sysid::simulate_states(g, u).cols(), 0);
+  const sysid::StateSpace s = random_discrete(rng, 3, 2, 1, 0.5);
+  const MatrixXd y = sysid::simulate(s, MatrixXd(0, 2));
+  EXPECT_EQ(y.rows(), 0);
+  EXPECT_EQ(y.cols(), 1);
+}
+
+TEST(CoreSimulate, RejectsViolatedPreconditions) {
+  std::mt19937_64 rng(9);
+  sysid::StateSpace s = random_discrete(rng, 3, 2, 1, 0.5);
+  EXPECT_THROW(sysid::simulate(s, MatrixXd::Zero(10, 3)), std::invalid_argument);
+  EXPECT_THROW(sysid::simulate(s, MatrixXd::Zero(10, 2), VectorXd::Zero(2)), std::invalid_argument);
+  EXPECT_THROW(sysid::simulate_states(s, MatrixXd::Zero(10, 1)), std::invalid_argument);
+  s.Ts = 0.0;
+  EXPECT_THROW(sysid::simulate(s, MatrixXd::Zero(10, 2)), std::invalid_argument);
+  EXPECT_THROW(sysid::simulate_states(s, MatrixXd::Zero(10, 2)), std::invalid_argument);
+}
+
+}  // namespace

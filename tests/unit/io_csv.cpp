@@ -1,0 +1,464 @@
+#include "sysid/io/csv.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <random>
+
+#include "sysid/core/errors.hpp"
+
+namespace fs = std::filesystem;
+using sysid::CsvTable;
+using sysid::DataError;
+using sysid::LogOptions;
+using sysid::NanPolicy;
+
+namespace {
+
+constexpr double nan_v = std::numeric_limits<double>::quiet_NaN();
+constexpr double inf_v = std::numeric_limits<double>::infinity();
+
+/// Runs f, expects a DataError at exactly file:line:column whose message contains
+/// `text`; returns the message for further checks.
+std::string expect_data_error(const std::function<void()>& f, const std::string& file, long line, long column,
+                              const std::string& text) {
+  try {
+    f();
+  } catch (const DataError& e) {
+    EXPECT_EQ(e.file(), file) << e.what();
+    EXPECT_EQ(e.line(), line) << e.what();
+    EXPECT_EQ(e.column(), column) << e.what();
+    EXPECT_NE(e.message().find(text), std::string::npos) << "message: " << e.what() << "\nexpected to contain: " << text;
+    return e.message();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "expected DataError, got: " << e.what();
+    return {};
+  }
+  ADD_FAILURE() << "expected DataError containing '" << text << "', nothing thrown";
+  return {};
+}
+
+CsvTable parse(const std::string& text) { return sysid::read_csv_string(text, "mem.csv"); }
+
+bool same_bits(double a, double b) {
+  std::uint64_t x, y;
+  std::memcpy(&x, &a, sizeof x);
+  std::memcpy(&y, &b, sizeof y);
+  return x == y;
+}
+
+/// A log t,u1,u2,y with t = k * ts for k = 0..n-1, u and y simple functions of k.
+std::string make_log(int n, double ts, const std::function<double(int)>& t_of = {}) {
+  std::string s = "t,u1,u2,y\n";
+  char buf[128];
+  for (int k = 0; k < n; ++k) {
+    const double t = t_of ? t_of(k) : k * ts;
+    std::snprintf(buf, sizeof buf, "%.9f,%d,%d,%d\n", t, k, 2 * k, 3 * k + 1);
+    s += buf;
+  }
+  return s;
+}
+
+// ---- parsing ------------------------------------------------------------------
+
+TEST(IoCsv, CommaFile) {
+  const CsvTable t = parse("t,u,y\n0,1.5,-2\n0.5,2e3,+3\n");
+  EXPECT_EQ(t.source, "mem.csv");
+  ASSERT_EQ(t.names, (std::vector<std::string>{"t", "u", "y"}));
+  ASSERT_EQ(t.values.rows(), 2);
+  ASSERT_EQ(t.values.cols(), 3);
+  EXPECT_EQ(t.values(0, 1), 1.5);
+  EXPECT_EQ(t.values(0, 2), -2.0);
+  EXPECT_EQ(t.values(1, 1), 2000.0);
+  EXPECT_EQ(t.values(1, 2), 3.0);
+  EXPECT_EQ(t.line_numbers, (std::vector<long>{2, 3}));
+  EXPECT_EQ(t.header_line, 1);
+  EXPECT_EQ(t.column("y"), 2);
+  EXPECT_EQ(t.column("t"), 0);
+  EXPECT_EQ(t.column("nope"), -1);
+}
+
+TEST(IoCsv, TabFileWithSpacesAroundFields) {
+  const CsvTable t = parse("time\tu 1\ty\n 0\t 1 \t2\n1\t3\t4  \n");
+  ASSERT_EQ(t.names, (std::vector<std::string>{"time", "u 1", "y"}));
+  ASSERT_EQ(t.values.rows(), 2);
+  EXPECT_EQ(t.values(0, 1), 1.0);
+  EXPECT_EQ(t.values(1, 2), 4.0);
+}
+
+TEST(IoCsv, WhitespaceFile) {
+  // Header aligned with spaces; data may mix spaces and tabs.
+  const CsvTable t = parse("  t   u  y \n0 1   2\n \t 1\t\t3 4   \n");
+  ASSERT_EQ(t.names, (std::vector<std::string>{"t", "u", "y"}));
+  ASSERT_EQ(t.values.rows(), 2);
+  EXPECT_EQ(t.values(1, 0), 1.0);
+  EXPECT_EQ(t.values(1, 1), 3.0);
+  EXPECT_EQ(t.values(1, 2), 4.0);
+}
+
+TEST(IoCsv, CommentsAndBlankLinesKeepFileLineNumbers) {
+  const CsvTable t = parse("# recorded 2024\n\n  # rig 3\nt,y\n1,2\n\n# pause\n   \n3,4\n");
+  EXPECT_EQ(t.header_line, 4);
+  ASSERT_EQ(t.values.rows(), 2);
+  EXPECT_EQ(t.line_numbers, (std::vector<long>{5, 9}));
+  EXPECT_EQ(t.values(1, 1), 4.0);
+}
+
+TEST(IoCsv, CrlfBomAndNoFinalNewline) {
+  const CsvTable t = parse("\xEF\xBB\xBFt,y\r\n0,1\r\n\r\n1,2");
+  ASSERT_EQ(t.names, (std::vector<std::string>{"t", "y"}));  // BOM not part of the first name
+  ASSERT_EQ(t.values.rows(), 2);
+  EXPECT_EQ(t.values(1, 1), 2.0);
+  EXPECT_EQ(t.line_numbers, (std::vector<long>{2, 4}));
+}
+
+TEST(IoCsv, QuotedHeaderNames) {
+  const CsvTable t = parse("\"t\", \"u\" ,y\n0,1,2\n");
+  EXPECT_EQ(t.names, (std::vector<std::string>{"t", "u", "y"}));
+}
+
+TEST(IoCsv, SpecialValuesAndEmptyCells) {
+  const CsvTable t = parse("a,b,c,d,e\nnan,NaN,inf,-inf,Infinity\n,2,,4,\n1e-320,-0,.5,5.,1E+2\n");
+  ASSERT_EQ(t.values.rows(), 3);
+  EXPECT_TRUE(std::isnan(t.values(0, 0)));
+  EXPECT_TRUE(std::isnan(t.values(0, 1)));
+  EXPECT_EQ(t.values(0, 2), inf_v);
+  EXPECT_EQ(t.values(0, 3), -inf_v);
+  EXPECT_EQ(t.values(0, 4), inf_v);
+  EXPECT_TRUE(std::isnan(t.values(1, 0)));  // empty first cell
+  EXPECT_EQ(t.values(1, 1), 2.0);
+  EXPECT_TRUE(std::isnan(t.values(1, 2)));  // empty middle cell
+  EXPECT_TRUE(std::isnan(t.values(1, 4)));  // empty last cell
+  EXPECT_EQ(t.values(2, 0), 1e-320);        // subnormal, exactly rounded
+  EXPECT_TRUE(std::signbit(t.values(2, 1)));
+  EXPECT_EQ(t.values(2, 2), 0.5);
+  EXPECT_EQ(t.values(2, 3), 5.0);
+  EXPECT_EQ(t.values(2, 4), 100.0);
+}
+
+TEST(IoCsv, NumbersAreCorrectlyRounded) {
+  // Each is the shortest decimal of a double; strtod is the reference.
+  const char* texts[] = {"0.1", "2.2250738585072014e-308", "1.7976931348623157e308", "4.9e-324", "0.30000000000000004",
+                         "123456789012345678901234567890", "9007199254740993"};
+  std::string csv = "x\n";
+  for (const char* s : texts) csv += std::string(s) + "\n";
+  const CsvTable t = parse(csv);
+  for (std::size_t i = 0; i < std::size(texts); ++i)
+    EXPECT_TRUE(same_bits(t.values(static_cast<Eigen::Index>(i), 0), std::strtod(texts[i], nullptr))) << texts[i];
+}
+
+TEST(IoCsv, NonNumberErrors) {
+  expect_data_error([] { parse("t,u,y\n0,1,2\n0.1,abc,3\n"); }, "mem.csv", 3, 2, "expected a number, found 'abc'");
+  expect_data_error([] { parse("t,u,y\n0,1, 2x \n"); }, "mem.csv", 2, 3, "expected a number, found '2x'");
+  expect_data_error([] { parse("t\tu\n0\t1,5\n"); }, "mem.csv", 2, 2, "found '1,5'");
+  expect_data_error([] { parse("t u\n0 0x1A\n"); }, "mem.csv", 2, 2, "found '0x1A'");
+  expect_data_error([] { parse("a,b\n1.2.3,1\n"); }, "mem.csv", 2, 1, "found '1.2.3'");
+  expect_data_error([] { parse("a,b\n1,+-1\n"); }, "mem.csv", 2, 2, "found '+-1'");
+  expect_data_error([] { parse("a,b\n1,--1\n"); }, "mem.csv", 2, 2, "found '--1'");
+  expect_data_error([] { parse("a,b\n1,1e\n"); }, "mem.csv", 2, 2, "found '1e'");
+  expect_data_error([] { parse("a,b\n1,-\n"); }, "mem.csv", 2, 2, "found '-'");
+  // Comments are whole-line only: a trailing comment is an error, not silently cut.
+  expect_data_error([] { parse("a,b\n1,2 # note\n"); }, "mem.csv", 2, 2, "found '2 # note'");
+  // A very long bad field is shortened in the message.
+  const std::string msg = expect_data_error([] { parse("a\n" + std::string(500, 'z') + "\n"); }, "mem.csv", 2, 1,
+                                            "expected a number");
+  EXPECT_LT(msg.size(), 120u);
+}
+
+TEST(IoCsv, WrongFieldCountErrors) {
+  expect_data_error([] { parse("t,u,y\n0,1,2\n0.1,2\n"); }, "mem.csv", 3, 3, "expected 3 fields, found 2");
+  expect_data_error([] { parse("t,u,y\n0,1,2,3\n"); }, "mem.csv", 2, 4, "expected 3 fields, found 4");
+  expect_data_error([] { parse("t,u,y\n0,1,2,x,y\n"); }, "mem.csv", 2, 4, "expected 3 fields, found 5");
+  expect_data_error([] { parse("t,u,y\n0,1,2,\n"); }, "mem.csv", 2, 4, "expected 3 fields, found 4");
+  expect_data_error([] { parse("t\tu\ty\n0\t1\n"); }, "mem.csv", 2, 3, "expected 3 fields, found 2");
+  expect_data_error([] { parse("t u y\n\n0 1\n"); }, "mem.csv", 3, 3, "expected 3 fields, found 2");
+  expect_data_error([] { parse("t u y\n0 1 2 3 4\n"); }, "mem.csv", 2, 4, "expected 3 fields, found 5");
+  expect_data_error([] { parse("t u y\n0 1 2 x\n"); }, "mem.csv", 2, 4, "expected 3 fields, found 4");
+}
+
+TEST(IoCsv, HeaderErrors) {
+  expect_data_error([] { parse("t,u,t\n0,1,2\n"); }, "mem.csv", 1, 3, "duplicate column name 't'");
+  expect_data_error([] { parse("# c\nt,,y\n0,1,2\n"); }, "mem.csv", 2, 2, "empty column name");
+  expect_data_error([] { parse("0,1,2\n3,4,5\n"); }, "mem.csv", 1, 1, "expected a header row");
+  expect_data_error([] { parse(""); }, "mem.csv", 0, 0, "empty file");
+  expect_data_error([] { parse("\xEF\xBB\xBF# only a comment\r\n\r\n"); }, "mem.csv", 0, 0, "empty file");
+  expect_data_error([] { parse("\n# c\nt,y\n\n# no data\n"); }, "mem.csv", 3, 0, "no data rows");
+}
+
+TEST(IoCsv, ReadFileAndMissingFile) {
+  const fs::path p = fs::temp_directory_path() / ("sysid_io_csv_" + std::to_string(::getpid()) + ".csv");
+  { std::ofstream(p) << "t,y\n0,1\n1,2\n"; }
+  const CsvTable t = sysid::read_csv(p.string());
+  EXPECT_EQ(t.source, p.string());
+  EXPECT_EQ(t.values(1, 1), 2.0);
+  fs::remove(p);
+  expect_data_error([&] { sysid::read_csv(p.string()); }, p.string(), 0, 0, "No such file");
+}
+
+// ---- logs ---------------------------------------------------------------------
+
+TEST(IoCsv, LogSelectsColumnsAndTsFromTimeColumn) {
+  const CsvTable table = parse(make_log(200, 0.001));
+  LogOptions o;
+  o.inputs = {"u2", "u1"};
+  o.outputs = {"y"};
+  const sysid::IoData d = sysid::log_from_table(table, o);
+  ASSERT_EQ(d.experiments.size(), 1u);
+  EXPECT_EQ(d.experiments[0].source, "mem.csv");
+  EXPECT_EQ(d.input_names, (std::vector<std::string>{"u2", "u1"}));
+  EXPECT_EQ(d.output_names, (std::vector<std::string>{"y"}));
+  ASSERT_EQ(d.experiments[0].u.rows(), 200);
+  ASSERT_EQ(d.experiments[0].u.cols(), 2);
+  EXPECT_EQ(d.experiments[0].u(10, 0), 20.0);
+  EXPECT_EQ(d.experiments[0].u(10, 1), 10.0);
+  EXPECT_EQ(d.experiments[0].y(199, 0), 598.0);
+  // Time stamps are printed with 9 decimals, exact for k * 1e-3: Ts to rounding.
+  EXPECT_NEAR(d.Ts, 0.001, 1e-15);
+}
+
+TEST(IoCsv, LogTsFromOptions) {
+  const CsvTable table = parse("u,y\n1,2\n3,4\n5,6\n");
+  LogOptions o;
+  o.inputs = {"u"};
+  o.outputs = {"y"};
+  expect_data_error([&] { sysid::log_from_table(table, o); }, "mem.csv", 0, 0, "no time column 't' and no --ts given");
+  o.ts = 0.01;
+  const sysid::IoData d = sysid::log_from_table(table, o);
+  EXPECT_EQ(d.Ts, 0.01);
+  EXPECT_EQ(d.experiments[0].y(2, 0), 6.0);
+  // Only outputs (time series) is fine too.
+  o.inputs.clear();
+  EXPECT_EQ(sysid::log_from_table(table, o).inputs(), 0);
+}
+
+TEST(IoCsv, LogTimeColumnAndTsMustAgree) {
+  const CsvTable table = parse(make_log(50, 0.002));
+  LogOptions o;
+  o.outputs = {"y"};
+  o.ts = 0.002;
+  EXPECT_NEAR(sysid::log_from_table(table, o).Ts, 0.002, 1e-15);
+  o.ts = 0.001;
+  expect_data_error([&] { sysid::log_from_table(table, o); }, "mem.csv", 0, 0, "gives a sample time of 0.002 s");
+  // An empty time_column name ignores the column: then ts is used as given.
+  o.time_column = "";
+  EXPECT_EQ(sysid::log_from_table(table, o).Ts, 0.001);
+  // Another name for the time column.
+  o.time_column = "u1";
+  o.ts.reset();
+  EXPECT_EQ(sysid::log_from_table(table, o).Ts, 1.0);
+}
+
+TEST(IoCsv, MissingColumnNamesHeaderLineAndAvailableColumns) {
+  const CsvTable table = parse("# a comment\n# another\nt,u1,y\n0,1,2\n1,2,3\n");
+  LogOptions o;
+  o.inputs = {"u1"};
+  o.outputs = {"y2"};
+  expect_data_error([&] { sysid::log_from_table(table, o); }, "mem.csv", 3, 0, "no column 'y2'; the columns are: t, u1, y");
+}
+
+TEST(IoCsv, NonUniformTimeStamps) {
+  // Row k sits on line k + 2; the step into row 55 (line 57) is 1.1 ms instead of 1 ms.
+  const CsvTable table = parse(make_log(100, 0.001, [](int k) { return k * 0.001 + (k >= 55 ? 0.0001 : 0.0); }));
+  LogOptions o;
+  o.outputs = {"y"};
+  expect_data_error([&] { sysid::log_from_table(table, o); }, "mem.csv", 57, 1,
+                    "non-uniform time stamps: step 0.0011 s at line 57, expected 0.001 s");
+  // A looser tolerance accepts it (10 % of Ts).
+  o.time_tolerance = 0.2;
+  EXPECT_NO_THROW(sysid::log_from_table(table, o));
+}
+
+TEST(IoCsv, TimeStampsMustIncrease) {
+  const CsvTable table = parse("t,y\n0,1\n1,2\n1,3\n2,4\n");
+  LogOptions o;
+  o.outputs = {"y"};
+  expect_data_error([&] { sysid::log_from_table(table, o); }, "mem.csv", 4, 1, "time stamps not increasing");
+  const CsvTable one = parse("t,y\n0,1\n");
+  expect_data_error([&] { sysid::log_from_table(one, o); }, "mem.csv", 2, 1, "need at least 2 samples");
+}
+
+TEST(IoCsv, NanPolicyErrorNamesTheCell) {
+  const CsvTable table = parse("t,u,y,junk\n0,1,2,nan\n1,2,,3\n2,3,4,5\n");
+  LogOptions o;
+  o.inputs = {"u"};
+  o.outputs = {"y"};
+  // The NaN in the unselected column "junk" (line 2) does not matter.
+  expect_data_error([&] { sysid::log_from_table(table, o); }, "mem.csv", 3, 3, "NaN or empty cell in column 'y'");
+  const CsvTable with_inf = parse("t,u,y\n0,1,2\n1,-inf,2\n");
+  expect_data_error([&] { sysid::log_from_table(with_inf, o); }, "mem.csv", 3, 2, "Inf in column 'u'");
+  const CsvTable nan_time = parse("t,u,y\n0,1,2\nnan,2,3\n2,3,4\n");
+  expect_data_error([&] { sysid::log_from_table(nan_time, o); }, "mem.csv", 3, 1, "column 't'");
+}
+
+TEST(IoCsv, NanPolicyDropRowsTrimsEndsOnly) {
+  const CsvTable table = parse("t,u,y\n0,nan,1\n0.5,1,\n1,2,3\n1.5,3,4\n2,4,5\n2.5,nan,nan\n");
+  LogOptions o;
+  o.inputs = {"u"};
+  o.outputs = {"y"};
+  o.nan_policy = NanPolicy::drop_rows;
+  const sysid::IoData d = sysid::log_from_table(table, o);
+  ASSERT_EQ(d.experiments[0].samples(), 3);
+  EXPECT_EQ(d.experiments[0].u(0, 0), 2.0);
+  EXPECT_EQ(d.experiments[0].y(2, 0), 5.0);
+  EXPECT_EQ(d.Ts, 0.5);
+
+  const CsvTable middle = parse("t,u,y\n0,1,1\n0.5,1,2\n1,nan,3\n1.5,3,4\n");
+  expect_data_error([&] { sysid::log_from_table(middle, o); }, "mem.csv", 4, 2, "non-uniform");
+  const CsvTable all_bad = parse("t,u,y\n0,nan,1\n0.5,nan,2\n");
+  expect_data_error([&] { sysid::log_from_table(all_bad, o); }, "mem.csv", 0, 0, "every row");
+}
+
+TEST(IoCsv, NanPolicyInterpolate) {
+  const CsvTable table = parse("t,u,y\n0,0,10\n1,1,nan\n2,nan,nan\n3,3,40\n4,inf,50\n5,5,60\n");
+  LogOptions o;
+  o.inputs = {"u"};
+  o.outputs = {"y"};
+  o.nan_policy = NanPolicy::interpolate;
+  const sysid::IoData d = sysid::log_from_table(table, o);
+  const auto& e = d.experiments[0];
+  ASSERT_EQ(e.samples(), 6);
+  EXPECT_EQ(e.u(2, 0), 2.0);
+  EXPECT_EQ(e.u(4, 0), 4.0);
+  EXPECT_DOUBLE_EQ(e.y(1, 0), 20.0);
+  EXPECT_DOUBLE_EQ(e.y(2, 0), 30.0);
+  EXPECT_EQ(d.Ts, 1.0);
+
+  // A gap in the time column is interpolated too (exactly: the grid is linear).
+  const CsvTable time_gap = parse("t,y\n0,1\nnan,2\n2,3\n");
+  o.inputs.clear();
+  EXPECT_EQ(sysid::log_from_table(time_gap, o).Ts, 1.0);
+
+  const CsvTable at_start = parse("t,u,y\n0,1,nan\n1,2,3\n2,3,4\n");
+  o.inputs = {"u"};
+  expect_data_error([&] { sysid::log_from_table(at_start, o); }, "mem.csv", 2, 3, "start of the record");
+  const CsvTable at_end = parse("t,u,y\n0,1,1\n1,2,3\n2,nan,4\n3,nan,5\n");
+  expect_data_error([&] { sysid::log_from_table(at_end, o); }, "mem.csv", 4, 2, "end of the record");
+}
+
+TEST(IoCsv, LogPreconditions) {
+  const CsvTable table = parse(make_log(10, 0.1));
+  LogOptions o;
+  EXPECT_THROW(sysid::log_from_table(table, o), std::invalid_argument);
+  o.inputs = {"u1"};
+  o.outputs = {"u1"};
+  EXPECT_THROW(sysid::log_from_table(table, o), std::invalid_argument);
+  o.outputs = {"y"};
+  o.ts = -1.0;
+  EXPECT_THROW(sysid::log_from_table(table, o), std::invalid_argument);
+}
+
+class IoCsvFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    m_dir = fs::temp_directory_path() / ("sysid_io_csv_" + std::to_string(::getpid()) + "_" +
+                                         ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(m_dir);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(m_dir, ec);
+  }
+  std::string write(const std::string& name, const std::string& text) {
+    const fs::path p = m_dir / name;
+    std::ofstream(p, std::ios::binary) << text;
+    return p.string();
+  }
+  fs::path m_dir;
+};
+
+TEST_F(IoCsvFiles, ReadLogsBuildsSeparateExperiments) {
+  const std::string a = write("a.csv", make_log(30, 0.01));
+  const std::string b = write("b.csv", make_log(45, 0.01, [](int k) { return 7.0 + k * 0.01; }));
+  LogOptions o;
+  o.inputs = {"u1"};
+  o.outputs = {"y"};
+  const sysid::IoData d = sysid::read_logs({a, b}, o);
+  ASSERT_EQ(d.experiments.size(), 2u);
+  EXPECT_EQ(d.experiments[0].samples(), 30);
+  EXPECT_EQ(d.experiments[1].samples(), 45);
+  EXPECT_EQ(d.experiments[1].source, b);
+  EXPECT_EQ(d.experiments[1].u(44, 0), 44.0);
+  EXPECT_NEAR(d.Ts, 0.01, 1e-14);
+
+  const std::string c = write("c.csv", make_log(20, 0.02));
+  expect_data_error([&] { sysid::read_logs({a, c}, o); }, c, 0, 0, "sample time 0.02 s differs");
+  // A bad second file reports its own name.
+  const std::string bad = write("bad.csv", "t,u1,y\n0,1,2\n0.01,x,3\n");
+  expect_data_error([&] { sysid::read_logs({a, bad}, o); }, bad, 3, 2, "found 'x'");
+}
+
+TEST_F(IoCsvFiles, WriteCsvRoundTripsThroughTheFile) {
+  Eigen::MatrixXd v(3, 2);
+  v << 0.1, -2.5e-7, 1.0 / 3.0, 1e300, -0.0, 42;
+  const std::string p = (m_dir / "out.csv").string();
+  sysid::write_csv(p, {"t", "y"}, v);
+  const CsvTable t = sysid::read_csv(p);
+  EXPECT_EQ(t.names, (std::vector<std::string>{"t", "y"}));
+  for (Eigen::Index i = 0; i < v.size(); ++i) EXPECT_TRUE(same_bits(t.values(i), v(i))) << i;
+  EXPECT_THROW(sysid::write_csv((m_dir / "missing" / "out.csv").string(), {"t", "y"}, v), DataError);
+}
+
+// ---- writing ------------------------------------------------------------------
+
+TEST(IoCsv, FormatCsvRoundTripIsBitExact) {
+  std::mt19937_64 rng(20240611);
+  std::uniform_int_distribution<std::uint64_t> bits;
+  std::normal_distribution<double> normal;
+  const Eigen::Index rows = 400, cols = 5;
+  Eigen::MatrixXd v(rows, cols);
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    // Column 0: arbitrary bit patterns (all exponents, subnormals; NaN patterns
+    // replaced since only "NaN-ness" survives text); the others: typical signals.
+    std::uint64_t b = bits(rng);
+    double x;
+    std::memcpy(&x, &b, sizeof x);
+    v(r, 0) = std::isnan(x) ? 0.0 : x;
+    v(r, 1) = normal(rng);
+    v(r, 2) = normal(rng) * 1e-300;
+    v(r, 3) = std::ldexp(normal(rng), -1060);  // subnormal range
+    v(r, 4) = static_cast<double>(r) * 0.001;
+  }
+  const double specials[] = {0.0, -0.0, 1e-300, 1e300, std::numeric_limits<double>::max(),
+                             std::numeric_limits<double>::min(), std::numeric_limits<double>::denorm_min(),
+                             -std::numeric_limits<double>::denorm_min(), inf_v, -inf_v};
+  for (std::size_t i = 0; i < std::size(specials); ++i) v(static_cast<Eigen::Index>(i), 1) = specials[i];
+  v(20, 2) = nan_v;
+
+  const std::vector<std::string> names{"a", "b", "c", "d", "t"};
+  const std::string text = sysid::format_csv(names, v);
+  const CsvTable t = parse(text);
+  ASSERT_EQ(t.names, names);
+  ASSERT_EQ(t.values.rows(), rows);
+  for (Eigen::Index r = 0; r < rows; ++r)
+    for (Eigen::Index c = 0; c < cols; ++c) {
+      if (std::isnan(v(r, c)))
+        EXPECT_TRUE(std::isnan(t.values(r, c)));
+      else
+        EXPECT_TRUE(same_bits(t.values(r, c), v(r, c))) << r << "," << c << ": " << v(r, c) << " vs " << t.values(r, c);
+    }
+  // Shortest form: 0.1 is written as "0.1", not 0.10000000000000001.
+  EXPECT_EQ(sysid::format_csv({"x"}, Eigen::MatrixXd::Constant(1, 1, 0.1)), "x\n0.1\n");
+}
+
+TEST(IoCsv, FormatCsvPreconditions) {
+  const Eigen::MatrixXd v = Eigen::MatrixXd::Zero(2, 2);
+  EXPECT_THROW(sysid::format_csv({"a"}, v), std::invalid_argument);
+  EXPECT_THROW(sysid::format_csv({"a", "a"}, v), std::invalid_argument);
+  EXPECT_THROW(sysid::format_csv({"a", "b,c"}, v), std::invalid_argument);
+  EXPECT_THROW(sysid::format_csv({"a", ""}, v), std::invalid_argument);
+  EXPECT_THROW(sysid::format_csv({"#a", "b"}, v), std::invalid_argument);
+  EXPECT_THROW(sysid::format_csv({"1", "2"}, v), std::invalid_argument);
+  EXPECT_THROW(sysid::format_csv({"two words"}, Eigen::MatrixXd::Zero(2, 1)), std::invalid_argument);
+  // Spaces inside names are fine with several columns (comma-delimited header).
+  const CsvTable t = parse(sysid::format_csv({"force x", "y"}, v));
+  EXPECT_EQ(t.names, (std::vector<std::string>{"force x", "y"}));
+}
+
+}  // namespace

@@ -1,0 +1,147 @@
+#include <sysid/core/frequency_response.hpp>
+#include <sysid/core/simulate.hpp>
+#include <sysid/subspace/n4sid.hpp>
+
+#include <gtest/gtest.h>
+
+#include "random_systems.hpp"
+
+using namespace sysid;
+
+namespace {
+
+/// Worst relative frequency-response error over a grid spanning 0..0.45 fs
+/// (the white-noise inputs excite the whole band), relative to the peak gain.
+double relative_frf_error(const StateSpace& truth, const StateSpace& model) {
+  const Eigen::VectorXd f = Eigen::VectorXd::LinSpaced(400, 0.001, 0.45);
+  const auto g0 = frequency_response(truth, f), g1 = frequency_response(model, f);
+  double peak = 0, worst = 0;
+  for (std::size_t k = 0; k < g0.size(); ++k) {
+    peak = std::max(peak, g0[k].cwiseAbs().maxCoeff());
+    worst = std::max(worst, (g0[k] - g1[k]).cwiseAbs().maxCoeff());
+  }
+  return worst / peak;
+}
+
+IoData simulate_noisy(const StateSpace& sys, Eigen::Index n, std::uint64_t seed, double noise_to_signal) {
+  const Eigen::MatrixXd u = test::white_noise(n, sys.inputs(), seed);
+  Eigen::MatrixXd y = simulate(sys, u);
+  for (Eigen::Index c = 0; c < y.cols(); ++c) {
+    const double rms = std::sqrt(y.col(c).squaredNorm() / static_cast<double>(n));
+    y.col(c) += test::white_noise(n, 1, seed + 100 + static_cast<std::uint64_t>(c), noise_to_signal * rms);
+  }
+  // Offsets that the identification must remove and report.
+  Eigen::MatrixXd u_off = u.array() + 3.0;
+  y.array() -= 1.5;
+  return IoData(u_off, y, sys.Ts);
+}
+
+}  // namespace
+
+class N4sidWeightings : public ::testing::TestWithParam<SubspaceWeighting> {};
+
+TEST_P(N4sidWeightings, RecoversRandomMimoSystemsFromNoisyData) {
+  // Seeded sweep over sizes, MIMO included; 1 % output noise, 6000 samples.
+  int case_no = 0;
+  for (auto [modes, m, l] : {std::tuple{1, 1, 1}, std::tuple{2, 1, 2}, std::tuple{3, 2, 2}, std::tuple{2, 3, 1}, std::tuple{4, 2, 3}}) {
+    const StateSpace truth = test::random_modal_system(modes, m, l, 40 + static_cast<std::uint64_t>(case_no));
+    const IoData data = simulate_noisy(truth, 6000, 7 + static_cast<std::uint64_t>(case_no), 0.01);
+    N4sidOptions opt;
+    opt.weighting = GetParam();
+    opt.order = 2 * modes;
+    const N4sidResult r = n4sid(data, opt);
+    EXPECT_EQ(r.order, 2 * modes);
+    EXPECT_LT(relative_frf_error(truth, r.model), 0.02) << "case " << case_no << " " << to_string(GetParam());
+    EXPECT_NEAR(r.input_offset(0), 3.0, 0.05);
+    for (Eigen::Index c = 0; c < l; ++c) EXPECT_GT(r.fit_percent(c), 95.0);
+    ++case_no;
+  }
+}
+
+TEST_P(N4sidWeightings, AutomaticOrderFindsTheTrueOrder) {
+  for (int modes : {1, 2, 3}) {
+    const StateSpace truth = test::random_modal_system(modes, 1, 2, 90 + static_cast<std::uint64_t>(modes));
+    const IoData data = simulate_noisy(truth, 8000, 3, 0.01);
+    N4sidOptions opt;
+    opt.weighting = GetParam();
+    opt.max_order = 12;
+    const N4sidResult r = n4sid(data, opt);
+    EXPECT_EQ(r.order, 2 * modes) << r.order_rule;
+    EXPECT_NE(r.order_rule.find("gap"), std::string::npos);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(AllWeightings, N4sidWeightings,
+                         ::testing::Values(SubspaceWeighting::n4sid, SubspaceWeighting::moesp, SubspaceWeighting::cva),
+                         [](const auto& info) { return std::string(to_string(info.param)); });
+
+TEST(N4sid, KalmanGainOfAKnownInnovationModel) {
+  // y = G u + H e with an innovation model whose predictor is stable (K is the
+  // steady-state Kalman gain of the system for some noise, so A - K C is stable):
+  // the identified one-step predictor must reach the innovation variance.
+  StateSpace sys = test::random_modal_system(2, 1, 1, 5, 0.1);
+  const KalmanFilterResult truth = steady_state_kalman_filter(sys.A, sys.C, 0.05 * Eigen::MatrixXd::Identity(4, 4),
+                                                              Eigen::MatrixXd::Constant(1, 1, 0.09), Eigen::MatrixXd::Zero(4, 1));
+  ASSERT_EQ(truth.status, KalmanFilterResult::Status::converged);
+  const Eigen::Index n = 20000;
+  const Eigen::MatrixXd u = test::white_noise(n, 1, 1), e = test::white_noise(n, 1, 2, 0.3);
+  StateSpace aug(sys.A, Eigen::MatrixXd(4, 2), sys.C, Eigen::MatrixXd(1, 2), 1.0);
+  aug.B << sys.B, truth.K;
+  aug.D << sys.D, Eigen::MatrixXd::Ones(1, 1);
+  Eigen::MatrixXd ue(n, 2);
+  ue << u, e;
+  const Eigen::MatrixXd y = simulate(aug, ue);
+  N4sidOptions opt;
+  opt.order = 4;
+  opt.horizon = 20;
+  const N4sidResult r = n4sid(IoData(u, y, 1.0), opt);
+  ASSERT_EQ(r.K.rows(), 4);
+  EXPECT_NEAR(r.noise_covariance(0, 0), 0.09, 0.09 * 0.05);
+  // One-step prediction error of the identified predictor ~ innovation variance.
+  StateSpace predictor(r.model.A - r.K * r.model.C, Eigen::MatrixXd(4, 2), r.model.C, Eigen::MatrixXd(1, 2), 1.0);
+  predictor.B << r.model.B - r.K * r.model.D, r.K;
+  predictor.D << r.model.D, Eigen::MatrixXd::Zero(1, 1);
+  Eigen::MatrixXd uy(n, 2);
+  uy << u.array() - r.input_offset(0), y.array() - r.output_offset(0);
+  const Eigen::MatrixXd yhat = simulate(predictor, uy);
+  const double mse = (y.array() - r.output_offset(0) - yhat.array()).matrix().bottomRows(n - 200).squaredNorm() / (n - 200);
+  EXPECT_NEAR(mse, 0.09, 0.09 * 0.05);
+}
+
+TEST(N4sid, ExperimentsAreCombined) {
+  const StateSpace truth = test::random_modal_system(2, 1, 1, 77);
+  IoData a = simulate_noisy(truth, 1500, 1, 0.01);
+  const IoData b = simulate_noisy(truth, 1500, 2, 0.01);
+  a.add_experiment(b.experiments[0]);
+  const N4sidResult r = n4sid(a, {.order = 4});
+  EXPECT_LT(relative_frf_error(truth, r.model), 0.03);
+}
+
+TEST(N4sid, EnforcedStabilityGivesAStableModel) {
+  const StateSpace truth = test::random_modal_system(3, 1, 1, 8, 0.002);  // poles very near the unit circle
+  const IoData data = simulate_noisy(truth, 3000, 4, 0.2);
+  N4sidOptions opt;
+  opt.order = 6;
+  opt.enforce_stability = true;
+  const N4sidResult r = n4sid(data, opt);
+  EXPECT_LT(r.model.A.eigenvalues().cwiseAbs().maxCoeff(), 1.0);
+}
+
+TEST(N4sid, ConstantInputIsRejected) {
+  const Eigen::MatrixXd u = Eigen::MatrixXd::Constant(500, 1, 2.0);
+  const IoData data(u, test::white_noise(500, 1, 1), 1.0);
+  try {
+    n4sid(data, {.order = 2});
+    FAIL();
+  } catch (const DataError& e) {
+    EXPECT_NE(std::string(e.what()).find("constant"), std::string::npos);
+  }
+}
+
+TEST(N4sid, OrderAboveHorizonIsAPreconditionError) {
+  const IoData data(test::white_noise(500, 1, 1), test::white_noise(500, 1, 2), 1.0);
+  N4sidOptions opt;
+  opt.order = 8;
+  opt.horizon = 5;
+  EXPECT_THROW(n4sid(data, opt), std::invalid_argument);
+}
