@@ -43,8 +43,9 @@ struct N4sidArgs {
   LogArgs log;
   std::string method = "n4sid";
   std::string order = "auto";
-  int max_order = 30;
-  std::string order_rule = "gap";
+  // Defaults of --max-order and --order-rule are the library's (N4sidOptions{}).
+  int max_order = N4sidOptions{}.max_order;
+  std::string order_rule = N4sidOptions{}.order_rule == OrderRule::svc ? "svc" : "gap";
   int horizon = 0;
   bool enforce_stability = false;
   std::string hankel = "auto";
@@ -204,7 +205,16 @@ void run_n4sid(const N4sidArgs& a) {
            << " for all orders, simulation fit [%], validation on " << validation_label << "):\n"
            << format_sweep_table(table, names);
     report << "best mean validation fit: order " << best->order << " (" << fmt(best->mean_validation_fit(), 4)
-           << " %); writing that model\n\n";
+           << " %); writing that model\n";
+    // Extra states that fit only noise add spurious modes: point at the smallest
+    // order that is practically as good (within 0.1 fit points), without overriding.
+    for (const auto& e : table)
+      if (e.ok && e.order < best->order && e.mean_validation_fit() >= best->mean_validation_fit() - 0.1) {
+        report << "note: order " << e.order << " is within 0.1 points of it (" << fmt(e.mean_validation_fit(), 4)
+               << " %); consider --order " << e.order << " for a model without noise modes\n";
+        break;
+      }
+    report << "\n";
     res = best->result;
     res.order_rule = "best mean validation fit over orders " + std::to_string(order.lo) + ".." + std::to_string(order.hi);
     validation_fit = best->validation_fit;
@@ -221,6 +231,9 @@ void run_n4sid(const N4sidArgs& a) {
   // Report.
   report << res.brief_report() << "\n";
   report << "order: " << res.order << " (" << res.order_rule << ")\n";
+  if (res.band_limited)
+    report << "band limit: " << fmt(a.band_limit_hz.value_or(0.0), 4) << " Hz Butterworth low-pass in series at the inputs ("
+           << res.model.order() << " states in total)\n";
   {
     const Eigen::Index shown = std::min<Eigen::Index>(res.singular_values.size(), 2 * res.order + 2);
     report << "leading singular values (" << shown << " of " << res.singular_values.size() << "):";
@@ -297,7 +310,7 @@ Verb register_n4sid(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::Range(1, 10000));
   cmd->add_option("--order-rule", args->order_rule,
-                  "automatic order rule: gap (largest singular-value gap) or svc (Bauer's criterion, for --method cva)")
+                  "automatic order rule: gap (largest singular-value gap) or svc (Bauer's singular-value criterion)")
       ->capture_default_str()
       ->check(CLI::IsMember({"gap", "svc"}));
   cmd->add_option("--horizon", args->horizon, "block rows i of the past/future Hankel matrix (default: automatic)")

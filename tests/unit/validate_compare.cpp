@@ -156,7 +156,9 @@ TEST(PredictKStep, MatchesBruteForceForStableAndUnstableModels) {
   // one steps explicitly. Both must equal the obvious algorithm.
   const StateSpace stable = test::random_modal_system(2, 1, 2, 41, 0.03);
   StateSpace unstable = stable;
-  unstable.A *= 1.02;  // spectral radius just above 1, the K below still stabilises A - K C
+  // Spectral radius exactly 1.02; the Kalman gain below still stabilises A - K C.
+  unstable.A *= 1.02 / stable.A.eigenvalues().cwiseAbs().maxCoeff();
+  ASSERT_NEAR(unstable.A.eigenvalues().cwiseAbs().maxCoeff(), 1.02, 1e-12);
   for (const StateSpace* sys : std::array<const StateSpace*, 2>{&stable, &unstable}) {
     const Eigen::MatrixXd K = kalman_gain(*sys, 1.0);
     const Eigen::VectorXd x0 = random_vector(sys->order(), 42);

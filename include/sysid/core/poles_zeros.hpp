@@ -11,6 +11,9 @@
 ///
 ///   S(lambda) = [A - lambda I, B; C, D],   i.e. the pencil ([A B; C D], [I 0; 0 0]).
 ///
+/// The square system matrix is first balanced (a state similarity plus output
+/// and input scalings, none of which moves a zero): unbalanced companion-form
+/// realisations lose several digits in their zeros.
 /// Feeding that (n+m) x (n+m) pencil straight to QZ is unreliable when D is
 /// singular: the pencil then has infinite eigenvalues in Jordan chains (one chain
 /// of length k+1 for relative degree k), and rounding splits such a chain into

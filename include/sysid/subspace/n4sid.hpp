@@ -47,6 +47,8 @@
 #include <Eigen/Dense>
 #include <sysid/core/discrete_riccati.hpp>
 #include <sysid/core/errors.hpp>
+#include <sysid/core/frequency_response.hpp>
+#include <sysid/core/interconnect.hpp>
 #include <sysid/core/io_data.hpp>
 #include <sysid/core/simulate.hpp>
 #include <sysid/core/state_space.hpp>
@@ -59,6 +61,7 @@
 #include <sysid/validate/fit.hpp>
 
 #include <cmath>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -81,10 +84,13 @@ struct N4sidOptions {
   /// Model order; 0 = choose automatically from the singular values (see order_rule).
   int order = 0;
   /// Largest order considered by the automatic choice.
-  int max_order = 30;
-  OrderRule order_rule = OrderRule::gap;
-  /// Block rows i of the past (and of the future); 0 = automatic:
-  /// max(10, 2 ceil(n_max / l)) with n_max = order (or max_order), reduced if the data are short.
+  int max_order = 20;
+  OrderRule order_rule = OrderRule::svc;  ///< see subspace/order_selection.hpp
+  /// Block rows i of the past (and of the future); 0 = automatic: for a given
+  /// order n, i = max(10, 2 ceil(n / l)); for the automatic order choice
+  /// i = max(10, ceil(1.5 max_order / l)) to choose the order, then the model of
+  /// the chosen order is identified again with the horizon for that order.
+  /// Reduced if the data are short.
   int horizon = 0;
   HankelRoute route = HankelRoute::automatic;
   bool remove_means = true;        ///< subtract channel means first (offsets returned in the result)
@@ -98,6 +104,14 @@ struct N4sidOptions {
   /// the subspace step runs there, A is mapped back by its principal r-th root
   /// and B, D, x0 are fitted at the original rate); 1 = never; an odd r > 1 = force r.
   int decimation = 0;
+  /// The Par2 paper's remedy for a band-limited excitation: when > 0, inputs
+  /// and outputs are pre-filtered by the same causal Butterworth low-pass at
+  /// this frequency (which leaves their relation unchanged but takes the
+  /// undetermined band out of the fit), and the returned model is the
+  /// identified one in series with that filter at its inputs, so its gain above
+  /// the band follows the filter instead of being arbitrary.
+  double band_limit_hz = 0.0;
+  int band_limit_order = 5;  ///< order of that Butterworth filter (the Par2 paper: 5th order at 100 Hz, fs = 2 kHz)
   /// Relative threshold (to the largest singular value) below which directions
   /// are treated as null in the pseudo-inverses of the projections.
   double rank_tolerance = 1e-10;
@@ -113,6 +127,9 @@ struct N4sidResult {
   Eigen::VectorXd x0;               ///< initial state of the first experiment
   Eigen::VectorXd input_offset, output_offset;
   Eigen::VectorXd singular_values;  ///< of the weighted projection, descending
+  /// Canonical correlations between future outputs (future inputs projected
+  /// out) and past data (the CVA singular values), used by the SVC order rule.
+  Eigen::VectorXd canonical_correlations;
   int order = 0;
   int horizon = 0;
   std::string order_rule;  ///< which rule chose the order (or "given by the user")
@@ -125,6 +142,7 @@ struct N4sidResult {
   double out_of_band_gain_ratio = 0;  ///< max gain above the excited band / max gain inside it
   Eigen::Index bdx_samples_used = 0;
   int decimation = 1;  ///< factor of the grid the subspace step ran on (1 = original rate)
+  bool band_limited = false;  ///< model includes the band-limiting Butterworth filter at its inputs (order + m * filter order)
   std::vector<std::string> warnings;
   int kalman_iterations = 0;
 
@@ -271,14 +289,8 @@ inline std::pair<double, double> excited_band(const IoData& data) {
 /// Largest singular value of the frequency response over [f0, f1] (grid of `points`).
 inline double peak_gain(const StateSpace& sys, double f0, double f1, int points) {
   double peak = 0;
-  for (int k = 0; k < points; ++k) {
-    const double f = f0 + (f1 - f0) * k / std::max(1, points - 1);
-    const std::complex<double> z = std::polar(1.0, 2.0 * std::numbers::pi * f * sys.Ts);
-    const Eigen::MatrixXcd zi = z * Eigen::MatrixXcd::Identity(sys.order(), sys.order()) - sys.A.cast<std::complex<double>>();
-    const Eigen::MatrixXcd g = sys.C.cast<std::complex<double>>() * zi.partialPivLu().solve(sys.B.cast<std::complex<double>>()) +
-                               sys.D.cast<std::complex<double>>();
+  for (const Eigen::MatrixXcd& g : frequency_response(sys, Eigen::VectorXd::LinSpaced(points, f0, f1)))
     peak = std::max(peak, Eigen::JacobiSVD<Eigen::MatrixXcd>(g).singularValues()(0));
-  }
   return peak;
 }
 
@@ -290,13 +302,20 @@ namespace detail {
 /// B, D and the residual covariance.
 struct SubspaceCore {
   Eigen::MatrixXd A, B, C, D, covariance;
-  Eigen::VectorXd singular_values;
+  Eigen::VectorXd singular_values, canonical_correlations;
   int order = 0, horizon = 0;
   std::string order_rule;
   HankelRoute route_used = HankelRoute::qr;
   double gram_condition_estimate = 0, observability_condition = 0;
   std::vector<std::string> warnings;
 };
+
+/// The automatic horizon of N4sidOptions::horizon.
+inline int automatic_horizon(int order, int max_order, Eigen::Index outputs) {
+  const auto l = static_cast<double>(outputs);
+  if (order > 0) return std::max(10, 2 * static_cast<int>(std::ceil(order / l)));
+  return std::max(10, static_cast<int>(std::ceil(1.5 * max_order / l)));
+}
 
 inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& options) {
   const Eigen::Index m = data.inputs(), l = data.outputs();
@@ -305,14 +324,15 @@ inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& option
   const int n_max = options.order > 0 ? options.order : options.max_order;
   int horizon = options.horizon;
   if (horizon == 0) {
-    horizon = std::max(10, 2 * static_cast<int>((n_max + l - 1) / l));
+    horizon = automatic_horizon(options.order, options.max_order, l);
     // Keep at least ~4 Hankel columns per row so the projections are well determined.
     Eigen::Index shortest = data.experiments.front().samples();
     for (const auto& e : data.experiments) shortest = std::min(shortest, e.samples());
     while (horizon > 2 && (2 * horizon > shortest || 4 * 2 * horizon * (m + l) > data.total_samples())) --horizon;
   }
   if (horizon < 2) throw std::invalid_argument("n4sid: need horizon >= 2");
-  if (static_cast<Eigen::Index>(horizon) * l <= n_max)
+  // A user-given order must fit under the horizon; an automatic choice is capped by it.
+  if (options.order > 0 && static_cast<Eigen::Index>(horizon) * l <= n_max)
     throw std::invalid_argument("n4sid: need horizon * outputs > order (" + std::to_string(horizon) + " * " + std::to_string(l) +
                                 " <= " + std::to_string(n_max) + "); increase --horizon");
   res.horizon = horizon;
@@ -334,27 +354,33 @@ inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& option
   const Eigen::MatrixXd wp = detail::vstack(hc.l_rows(lay.u_rows(0, i - 1)), hc.l_rows(lay.y_rows(0, i - 1)));
   const detail::ObliqueProjection oi = detail::oblique_projection(yf, uf, wp, tol);
 
-  // Step 3: weighted SVD.
+  // Step 3: weighted SVD. The CVA weight is always formed: its singular values
+  // are the canonical correlations between the future outputs (with the future
+  // inputs projected out) and the past, which the SVC order rule needs whatever
+  // weighting determines Gamma_i.
+  auto [cva_root, cva_inv_root] = detail::sqrt_and_inverse_sqrt(oi.yf_perp * oi.yf_perp.transpose(), tol);
+  const Eigen::MatrixXd cva_weighted = cva_inv_root * oi.o_perp;
   Eigen::MatrixXd weighted, w1_inv;
   switch (options.weighting) {
     case SubspaceWeighting::n4sid: weighted = oi.o; break;
     case SubspaceWeighting::moesp: weighted = oi.o_perp; break;
-    case SubspaceWeighting::cva: {
-      auto [root, inv_root] = detail::sqrt_and_inverse_sqrt(oi.yf_perp * oi.yf_perp.transpose(), tol);
-      weighted = inv_root * oi.o_perp;
-      w1_inv = root;
+    case SubspaceWeighting::cva:
+      weighted = cva_weighted;
+      w1_inv = cva_root;
       break;
-    }
   }
   Eigen::BDCSVD<Eigen::MatrixXd> svd(weighted, Eigen::ComputeThinU);
   res.singular_values = svd.singularValues();
+  res.canonical_correlations = options.weighting == SubspaceWeighting::cva
+                                   ? res.singular_values
+                                   : Eigen::VectorXd(Eigen::BDCSVD<Eigen::MatrixXd>(cva_weighted).singularValues());
   if (options.order > 0) {
     res.order = options.order;
     res.order_rule = "given by the user";
   } else {
     const int top = std::min<int>(options.max_order, static_cast<int>(i * l) - 1);
     const OrderChoice choice = options.order_rule == OrderRule::svc
-                                   ? choose_order_by_svc(res.singular_values, top, hc.columns, l, m)
+                                   ? choose_order_by_svc(res.canonical_correlations, top, hc.columns, l, m)
                                    : choose_order_by_gap(res.singular_values, top);
     res.order = choice.order;
     res.order_rule = choice.rule;
@@ -489,6 +515,15 @@ inline N4sidResult n4sid(IoData data, const N4sidOptions& options = {}) {
     res.input_offset = off.input;
     res.output_offset = off.output;
   }
+  std::optional<SecondOrderSections> band_limit;
+  if (options.band_limit_hz > 0) {
+    if (options.band_limit_order < 1) throw std::invalid_argument("n4sid: need band_limit_order >= 1");
+    band_limit = butterworth(options.band_limit_order, BandType::lowpass, options.band_limit_hz, 0.0, 1.0 / data.Ts);
+    for (auto& e : data.experiments) {
+      e.u = sos_filter(*band_limit, e.u);
+      e.y = sos_filter(*band_limit, e.y);
+    }
+  }
   // Excitation check and unit-RMS scaling.
   const double total = static_cast<double>(data.total_samples());
   Eigen::VectorXd su = Eigen::VectorXd::Zero(m), sy = Eigen::VectorXd::Zero(l);
@@ -514,16 +549,33 @@ inline N4sidResult n4sid(IoData data, const N4sidOptions& options = {}) {
   res.excited_band_high_hz = band_hi;
   res.decimation = detail::decimation_factor(1.0 / data.Ts, band_hi, options.decimation);
   detail::SubspaceCore core;
+  // The order is chosen at a horizon sized for max_order; the model of that
+  // order is then identified at the horizon sized for it (unless the user fixed one).
+  auto identify = [&options](const IoData& d) {
+    detail::SubspaceCore c = detail::subspace_core(d, options);
+    if (options.order == 0 && options.horizon == 0 &&
+        detail::automatic_horizon(c.order, options.max_order, d.outputs()) != c.horizon) {
+      N4sidOptions second = options;
+      second.order = c.order;
+      detail::SubspaceCore fixed = detail::subspace_core(d, second);
+      fixed.order_rule = c.order_rule + " at horizon " + std::to_string(c.horizon);
+      fixed.singular_values = c.singular_values;
+      fixed.canonical_correlations = c.canonical_correlations;
+      c = std::move(fixed);
+    }
+    return c;
+  };
   if (res.decimation > 1) {
-    core = detail::subspace_core(detail::decimate(data, res.decimation), options);
+    core = identify(detail::decimate(data, res.decimation));
     core.A = detail::principal_root(core.A, res.decimation);
     res.warnings.push_back("n4sid: the inputs excite only 0.." + std::to_string(band_hi) + " Hz of " + std::to_string(nyquist) +
                            " Hz: identified on a grid decimated by " + std::to_string(res.decimation) +
                            " (A mapped back by its principal root, B, D, x0 fitted at the original rate)");
   } else {
-    core = detail::subspace_core(data, options);
+    core = identify(data);
   }
   res.singular_values = core.singular_values;
+  res.canonical_correlations = core.canonical_correlations;
   res.order = core.order;
   res.horizon = core.horizon;
   res.order_rule = core.order_rule;
@@ -591,6 +643,25 @@ inline N4sidResult n4sid(IoData data, const N4sidOptions& options = {}) {
   if (K.size() > 0) res.K = K * sy.cwiseInverse().asDiagonal();
   res.noise_covariance = sy.asDiagonal() * innovation * sy.asDiagonal();
   res.x0 = x0.front();
+  if (band_limit) {
+    // Filter at the inputs: one copy per input channel. The filtered data's x0
+    // belongs to the unfiltered model states; the filter starts at rest.
+    const StateSpace filter = sos_to_state_space(*band_limit);
+    const StateSpace filters = block_diagonal(std::vector<StateSpace>(static_cast<std::size_t>(m), filter));
+    StateSpace limited = series(filters, res.model);
+    limited.input_names = res.model.input_names;
+    limited.output_names = res.model.output_names;
+    Eigen::VectorXd x0_all = Eigen::VectorXd::Zero(limited.order());
+    x0_all.tail(res.model.order()) = res.x0;
+    if (res.K.size() > 0) {
+      Eigen::MatrixXd k_all = Eigen::MatrixXd::Zero(limited.order(), l);
+      k_all.bottomRows(res.model.order()) = res.K;
+      res.K = k_all;
+    }
+    res.model = limited;
+    res.x0 = x0_all;
+    res.band_limited = true;
+  }
   if (!A.allFinite() || !res.model.B.allFinite() || !res.model.D.allFinite())
     throw NumericalError("n4sid: the identified matrices contain NaN or Inf");
 

@@ -3,19 +3,22 @@
 /// Purpose: choose the model order from the singular values of the weighted
 /// oblique projection of subspace identification.
 ///
-/// Method: two rules, both reported so the user sees why an order was chosen.
-///  - gap: the order n maximising log10(sigma_n / sigma_{n+1}) over 1..max_order,
-///    i.e. the largest drop on the usual log-scale singular-value plot
-///    (Van Overschee & De Moor 1996, sec. 4.3.2 "order by inspection of the
-///    singular values", made automatic).
-///  - svc: Bauer's singular-value criterion (D. Bauer, "Order estimation for
-///    subspace methods", Automatica 37 (2001) 1561-1573, eq. (7)):
-///    SVC(n) = sigma_{n+1}^2 + C(N) d(n) / N with d(n) = 2 n l the number of
-///    parameters of the (A, C) pair... scaled to canonical correlations; C(N) = log N.
-///    Valid for CVA-weighted singular values (canonical correlations in [0,1]).
-/// The default `automatic` uses `gap`, because it is weighting-independent.
+/// Method: two rules; the result says which one chose the order and why.
+///  - svc (default): Bauer's singular-value criterion on the canonical
+///    correlations sigma_k between future outputs (future inputs projected out)
+///    and the past (D. Bauer, "Order estimation for subspace methods",
+///    Automatica 37 (2001) 1561-1573, sec. 4):
+///      SVC(n) = sigma_{n+1}^2 + C(N) d(n) / N,   C(N) = log N,
+///    with N the number of Hankel columns and d(n) = n (2l + m) the number of
+///    free parameters of (A, B, C, K) up to a similarity transform. A
+///    statistical rule: a mode is kept when its canonical correlation stands
+///    out of what N samples of noise would give.
+///  - gap: the order n maximising log10(sigma_n / sigma_{n+1}) of the weighted
+///    singular values over 1..max_order, i.e. the largest drop on the usual
+///    log-scale plot (Van Overschee & De Moor 1996, sec. 4.3.2, made automatic).
+///    Scale-free but blind to weak modes behind a large gap.
 ///
-/// Preconditions: singular values sorted descending, max_order < size.
+/// Preconditions: singular values sorted descending, 1 <= max_order < size.
 #include <Eigen/Dense>
 #include <cmath>
 #include <stdexcept>

@@ -8,7 +8,9 @@
 ///
 /// Method: one n4sid() per order with the SAME horizon for all orders, chosen for
 /// the largest order `hi` (so the orders differ only in the truncation of the same
-/// SVD, and a difference in fit is due to the order alone). Validation is by
+/// SVD, and a difference in fit is due to the order alone): order hi is identified
+/// first with base.horizon (0 = n4sid's automatic choice for order hi), and the
+/// horizon it used is then imposed on every other order. Validation is by
 /// simulation from an x0 estimated on the validation data (validate/compare.hpp),
 /// with the offsets of each identified model removed.
 ///
@@ -44,12 +46,12 @@ struct OrderSweepEntry {
   }
 };
 
-/// Horizon that n4sid() chooses automatically for largest order `hi` on `data`
-/// (the rule of n4sid(): max(10, 2 ceil(hi / l)), shortened for short data).
-/// tests/unit/subspace_order_sweep.cpp checks it against n4sid()'s own choice.
-inline int order_sweep_horizon(const IoData& data, int hi) {
+/// Horizon for the sweep when n4sid() fails at order `hi` (so its choice is not
+/// known): n4sid's automatic horizon for a given order (detail::automatic_horizon),
+/// shortened for short data by the same rule as n4sid.
+inline int order_sweep_horizon(const IoData& data, int hi, int max_order) {
   const Eigen::Index m = data.inputs(), l = data.outputs();
-  int horizon = std::max(10, 2 * static_cast<int>((hi + l - 1) / l));
+  int horizon = detail::automatic_horizon(hi, max_order, l);
   Eigen::Index shortest = data.experiments.front().samples();
   for (const auto& e : data.experiments) shortest = std::min(shortest, e.samples());
   while (horizon > 2 && (2 * horizon > shortest || 4 * 2 * horizon * (m + l) > data.total_samples())) --horizon;
@@ -70,13 +72,11 @@ inline std::vector<OrderSweepEntry> n4sid_order_sweep(const IoData& estimation, 
   validation.validate();
   if (validation.inputs() != estimation.inputs() || validation.outputs() != estimation.outputs())
     throw std::invalid_argument("order sweep: estimation and validation data have different channels");
-  if (base.horizon == 0) base.horizon = order_sweep_horizon(estimation, hi);
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  std::vector<OrderSweepEntry> table;
-  for (int order = lo; order <= hi; ++order) {
+  auto identify = [&](int order, const N4sidOptions& options_for_order) {
     OrderSweepEntry entry;
     entry.order = order;
-    N4sidOptions options = base;
+    N4sidOptions options = options_for_order;
     options.order = order;
     try {
       entry.result = n4sid(estimation, options);
@@ -84,8 +84,7 @@ inline std::vector<OrderSweepEntry> n4sid_order_sweep(const IoData& estimation, 
       entry.warnings.push_back(std::string("order ") + std::to_string(order) + " failed: " + e.what());
       entry.estimation_fit = Eigen::VectorXd::Constant(estimation.outputs(), nan);
       entry.validation_fit = Eigen::VectorXd::Constant(estimation.outputs(), nan);
-      table.push_back(std::move(entry));
-      continue;
+      return entry;
     }
     entry.ok = true;
     entry.warnings = entry.result.warnings;
@@ -94,8 +93,14 @@ inline std::vector<OrderSweepEntry> n4sid_order_sweep(const IoData& estimation, 
     co.input_offset = entry.result.input_offset;
     co.output_offset = entry.result.output_offset;
     entry.validation_fit = compare_fit(entry.result.model, entry.result.K, validation, co);
-    table.push_back(std::move(entry));
-  }
+    return entry;
+  };
+  // Order hi first: the horizon n4sid picks for it is the one for all.
+  OrderSweepEntry top = identify(hi, base);
+  if (base.horizon == 0) base.horizon = top.ok ? top.result.horizon : order_sweep_horizon(estimation, hi, base.max_order);
+  std::vector<OrderSweepEntry> table;
+  for (int order = lo; order < hi; ++order) table.push_back(identify(order, base));
+  table.push_back(std::move(top));
   return table;
 }
 
