@@ -1,5 +1,4 @@
 // sysid excite: write an excitation signal (chirp, log chirp, multisine, PRBS) as CSV.
-#include <sysid/io/atomic_file.hpp>
 #include <sysid/io/csv.hpp>
 #include <sysid/signal/excitation.hpp>
 

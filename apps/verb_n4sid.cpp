@@ -22,22 +22,6 @@ namespace sysid::cli {
 
 namespace {
 
-// ---- --band-limit HZ --------------------------------------------------------
-// The Par2 remedy for gain the data do not determine above the excited band:
-// band-limit data and model with a Butterworth low-pass. The option belongs to
-// N4sidOptions (member `band_limit_hz`, added by the lead). It is offered and
-// wired automatically as soon as that member exists; until then it is absent.
-template <class Options>
-concept HasBandLimit = requires(Options o) { o.band_limit_hz = 1.0; };
-
-/// Template so that the member access is only compiled when the member exists.
-template <class Options>
-void set_band_limit(Options& options, const std::optional<double>& hz) {
-  if constexpr (HasBandLimit<Options>) {
-    if (hz) options.band_limit_hz = *hz;
-  }
-}
-
 struct N4sidArgs {
   std::string log_path;
   LogArgs log;
@@ -178,7 +162,9 @@ void run_n4sid(const N4sidArgs& a) {
   options.horizon = a.horizon;
   options.route = a.hankel == "qr" ? HankelRoute::qr : a.hankel == "cholesky" ? HankelRoute::cholesky : HankelRoute::automatic;
   options.enforce_stability = a.enforce_stability;
-  set_band_limit(options, a.band_limit_hz);
+  // --band-limit: the Par2 remedy for gain the data do not determine above the
+  // excited band (the model comes back in series with the low-pass at its inputs).
+  if (a.band_limit_hz) options.band_limit_hz = *a.band_limit_hz;
 
   const std::vector<std::string> names = output_names(all);
   std::ostringstream report;
@@ -278,9 +264,7 @@ void run_n4sid(const N4sidArgs& a) {
   p["excited_band_hz"] = {res.excited_band_low_hz, res.excited_band_high_hz};
   p["hankel_route"] = to_string(res.route_used);
   if (a.enforce_stability) p["enforce_stability"] = true;
-  if constexpr (HasBandLimit<N4sidOptions>) {
-    if (a.band_limit_hz) p["band_limit_hz"] = *a.band_limit_hz;
-  }
+  if (a.band_limit_hz) p["band_limit_hz"] = *a.band_limit_hz;
   p["sysid_version"] = SYSID_VERSION_STRING;
   write_model_json(a.out, file);
   note(verb, "wrote " + a.out);
@@ -334,12 +318,10 @@ Verb register_n4sid(CLI::App& app) {
                              },
                              "F"));
   val->excludes(spl);
-  if constexpr (HasBandLimit<N4sidOptions>) {
-    cmd->add_option("--band-limit", args->band_limit_hz,
-                    "band-limit data and model with a Butterworth low-pass at HZ (Par2 paper remedy for gain above the "
-                    "excited band)")
-        ->check(CLI::PositiveNumber);
-  }
+  cmd->add_option("--band-limit", args->band_limit_hz,
+                  "HZ: low-pass inputs and outputs (Butterworth) before identification and put the filter in series "
+                  "with the model, so its gain above the excited band is not arbitrary (Par2 paper remedy)")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--out", args->out, "model file to write (JSON, with K, offsets, x0 and provenance)");
   cmd->footer(
       "Prints the order and the rule that chose it, the leading singular values, the\n"

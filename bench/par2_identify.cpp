@@ -17,7 +17,9 @@
 /// remove before calling their tools.
 ///
 /// Output (one line, parsed by run_peers.sh):
-///   RESULT tag=sysid fit_time_s=0.0123 cpu_s=0.0121 repeats=5 maxrss_mb=12.3 decimation=5 est_fit=97.1
+///   RESULT tag=sysid status=ok fit_time_s=0.0123 cpu_s=0.0121 repeats=5 maxrss_mb=12.3 decimation=5 ...
+/// or, when n4sid throws (exit code 3):
+///   RESULT tag=sysid status=failed maxrss_mb=9.3 reason=<the exception's message>
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -115,12 +117,14 @@ int main(int argc, char** argv) {
     sysid::write_model_json(out, file);
 
     for (const auto& w : result.warnings) std::cerr << "sysid warning: " << w << "\n";
-    std::printf("RESULT tag=%s fit_time_s=%.6f cpu_s=%.6f repeats=%d maxrss_mb=%.1f decimation=%d horizon=%d est_fit=%.3f\n",
+    std::printf("RESULT tag=%s status=ok fit_time_s=%.6f cpu_s=%.6f repeats=%d maxrss_mb=%.1f decimation=%d horizon=%d est_fit=%.3f\n",
                 tag.c_str(), best_wall, best_cpu, repeats, max_rss_mb(), result.decimation, result.horizon,
                 result.fit_percent(0));
     return 0;
   } catch (const std::exception& e) {
+    // A failure is a result too: the table reports it with its reason.
     std::cerr << "sysid_bench_par2_identify: " << e.what() << "\n";
+    std::printf("RESULT tag=%s status=failed maxrss_mb=%.1f reason=%s\n", tag.c_str(), max_rss_mb(), e.what());
     return 3;
   }
 }

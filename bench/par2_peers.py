@@ -17,7 +17,9 @@ state-space JSON (Ts, A, B, C, D).
             subspace_identification(), system_identification(rank=n)
             (PO-MOESP, Verhaegen & Verdult 2007).
 
-Prints:  RESULT tag=sippy fit_time_s=... repeats=... maxrss_mb=... base_rss_mb=...
+Prints:  RESULT tag=sippy status=ok fit_time_s=... repeats=... maxrss_mb=... base_rss_mb=...
+or, when the tool raises (exit code 3; MemoryError included, see run_peers.sh's cap):
+         RESULT tag=nfoursid status=failed fit_time_s=... maxrss_mb=... reason=<exception>
 """
 import argparse
 import contextlib
@@ -81,10 +83,16 @@ def main():
     best = float("inf")
     for _ in range(a.repeats):
         t0 = time.perf_counter()
-        if a.tool == "sippy":
-            A, B, C, D = identify_sippy(u.copy(), y.copy(), ts, a.order, a.horizon)
-        else:
-            A, B, C, D = identify_nfoursid(u, y, ts, a.order, a.horizon, frame)
+        try:
+            if a.tool == "sippy":
+                A, B, C, D = identify_sippy(u.copy(), y.copy(), ts, a.order, a.horizon)
+            else:
+                A, B, C, D = identify_nfoursid(u, y, ts, a.order, a.horizon, frame)
+        except (Exception, MemoryError) as e:  # a failure is a result too: the table reports it
+            reason = f"{type(e).__name__}: {e}".replace("\n", " ")
+            print(f"RESULT tag={a.tool} status=failed fit_time_s={time.perf_counter() - t0:.6f} "
+                  f"maxrss_mb={max_rss_mb():.1f} base_rss_mb={base:.1f} reason={reason}")
+            return 3
         best = min(best, time.perf_counter() - t0)
 
     def mat(m):
@@ -94,7 +102,7 @@ def main():
              "provenance": {"method": a.tool, "order": a.order, "horizon": a.horizon}}
     with open(a.out, "w") as f:
         json.dump(model, f)  # repr of floats: shortest round-trip form
-    print(f"RESULT tag={a.tool} fit_time_s={best:.6f} repeats={a.repeats} maxrss_mb={max_rss_mb():.1f} "
+    print(f"RESULT tag={a.tool} status=ok fit_time_s={best:.6f} repeats={a.repeats} maxrss_mb={max_rss_mb():.1f} "
           f"base_rss_mb={base:.1f}")
     return 0
 

@@ -65,11 +65,15 @@ class N4sidApp : public ::testing::Test {
 }  // namespace
 
 TEST_F(N4sidApp, AutoOrderPicksFourAndFitsFreshData) {
+  // The singular values drop by ~1000x after the 4th (1 % noise): the gap rule
+  // must see it. (The default rule is the library's; see DefaultRuleFindsTheModes.)
   const std::string model = path("auto.json");
-  const CliResult r = run_cli({"n4sid", path("log.csv"), "--inputs", "u", "--outputs", "y", "--order", "auto", "--out", model});
+  const CliResult r = run_cli({"n4sid", path("log.csv"), "--inputs", "u", "--outputs", "y", "--order", "auto",
+                               "--order-rule", "gap", "--out", model});
   ASSERT_EQ(r.exit_code, 0) << describe(r);
   EXPECT_EQ(printed_order(r.out), 4) << r.out;
-  EXPECT_NE(r.out.find("largest singular-value gap"), std::string::npos) << r.out;  // the rule that chose it
+  // The rule that chose it is named: "order: 4 (<rule>)".
+  EXPECT_NE(r.out.find("\norder: 4 (largest singular-value gap"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("leading singular values (10 of"), std::string::npos) << r.out;  // 2 * order + 2
   EXPECT_NE(r.out.find("excited band:"), std::string::npos);
   EXPECT_NE(r.out.find("freq [Hz]"), std::string::npos);  // modal table
@@ -112,10 +116,30 @@ TEST_F(N4sidApp, AutoOrderPicksFourAndFitsFreshData) {
   EXPECT_FALSE(p.contains("validation"));  // no validation data given
 }
 
+TEST_F(N4sidApp, DefaultRuleFindsTheModes) {
+  // Whatever the library's default order rule, the automatic order must contain
+  // the two true modes and predict fresh data.
+  const std::string model = path("default.json");
+  const CliResult r = run_cli({"n4sid", path("log.csv"), "--inputs", "u", "--outputs", "y", "--out", model});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  const int order = printed_order(r.out);
+  EXPECT_GE(order, 4) << r.out;
+  EXPECT_LE(order, 6) << r.out;
+  const std::vector<Mode> modes = modal_table(read_model_json(model).model);
+  auto has_mode = [&](double f, double zeta) {
+    for (const Mode& m : modes)
+      if (std::abs(m.freq_hz - f) < 0.01 * f && std::abs(m.damping - zeta) < 0.2 * zeta) return true;
+    return false;
+  };
+  EXPECT_TRUE(has_mode(50.0, 0.02)) << r.out;
+  EXPECT_TRUE(has_mode(120.0, 0.05)) << r.out;
+  EXPECT_GT(fresh_fit(model), 95.0);
+}
+
 TEST_F(N4sidApp, SplitValidatesOnTheHeldOutSamples) {
   const std::string model = path("split.json");
-  const CliResult r =
-      run_cli({"n4sid", path("log.csv"), "--inputs", "u", "--outputs", "y", "--split", "0.7", "--out", model});
+  const CliResult r = run_cli(
+      {"n4sid", path("log.csv"), "--inputs", "u", "--outputs", "y", "--split", "0.7", "--order-rule", "gap", "--out", model});
   ASSERT_EQ(r.exit_code, 0) << describe(r);
   EXPECT_EQ(printed_order(r.out), 4) << r.out;
   const double val = fit_after(r.out, "fit on validation data", "y");
@@ -185,7 +209,7 @@ TEST_F(N4sidApp, HelpHasAnExample) {
   EXPECT_NE(r.out.find("Example"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("sysid n4sid log.csv --inputs"), std::string::npos) << r.out;
   for (const char* option : {"--inputs", "--outputs", "--ts", "--nan-policy", "--method", "--order", "--max-order",
-                             "--order-rule", "--horizon", "--enforce-stability", "--hankel", "--validate", "--split", "--out"})
+                             "--order-rule", "--horizon", "--enforce-stability", "--hankel", "--validate", "--split", "--band-limit", "--out"})
     EXPECT_NE(r.out.find(option), std::string::npos) << option;
 }
 
@@ -195,4 +219,15 @@ TEST_F(N4sidApp, SplitAndValidateTogetherAreAUsageError) {
                                path("fresh.csv"), "--out", model});
   EXPECT_EQ(r.exit_code, 1) << describe(r);
   EXPECT_FALSE(std::filesystem::exists(model));
+}
+
+TEST_F(N4sidApp, BandLimitIsPassedToTheLibraryAndRecorded) {
+  const std::string model = path("band.json");
+  const CliResult r = run_cli(
+      {"n4sid", path("log.csv"), "--inputs", "u", "--outputs", "y", "--order", "4", "--band-limit", "400", "--out", model});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_NE(r.out.find("band limit: 400 Hz"), std::string::npos) << r.out;
+  const ModelFile f = read_model_json(model);
+  EXPECT_EQ(f.provenance.at("band_limit_hz").get<double>(), 400.0);
+  EXPECT_GT(f.model.order(), 4);  // the low-pass is in series with the identified 4th-order model
 }
