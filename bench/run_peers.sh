@@ -60,7 +60,7 @@ while [ $# -gt 0 ]; do
     --skip-cli) SKIP_CLI=1 ;;
     --skip-csv) SKIP_CSV=1 ;;
     --out-dir) OUT=$2; shift ;;
-    -h|--help) sed -n '2,37p' "${BASH_SOURCE[0]}"; exit 0 ;;
+    -h|--help) sed -n '2,35p' "${BASH_SOURCE[0]}"; exit 0 ;;
     *) echo "run_peers.sh: unknown option $1" >&2; exit 1 ;;
   esac
   shift
@@ -118,7 +118,7 @@ VAL=$DATA/par2_gu_val.csv
   echo "sysid: $(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo '?')$(git -C "$ROOT" diff --quiet 2>/dev/null || echo ' (with uncommitted changes)')"
   echo "machine: nproc $(nproc), $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(awk '/MemTotal/ {printf "%.1f GiB", $2/1048576}' /proc/meminfo), load average $(cut -d' ' -f1-3 /proc/loadavg)"
   echo "compiler: $(c++ --version | head -1); flags: Release -march=native"
-  command -v octave >/dev/null && echo "octave: $(octave --version | head -1), control $(octave --no-gui --quiet --norc --eval 'p = pkg("list", "control"); disp(p{1}.version)' 2>/dev/null)"
+  command -v octave >/dev/null && echo "octave: $(octave --version 2>/dev/null | head -1), control $(octave --no-gui --quiet --norc --eval 'p = pkg("list", "control"); disp(p{1}.version)' 2>/dev/null)"
   python3 -c "
 import importlib.metadata as m
 for p in ('numpy', 'scipy', 'sippy_unipi', 'nfoursid'):
