@@ -36,6 +36,8 @@ struct N4sidArgs {
   std::string validate;
   std::optional<double> split;
   std::optional<double> band_limit_hz;
+  int band_limit_order = N4sidOptions{}.band_limit_order;
+  std::string decimation = "auto";
   std::string out;
 };
 
@@ -124,7 +126,11 @@ void run_n4sid(const N4sidArgs& a) {
 
   const LogOptions log_options =
       make_log_options(a.log, split_names(a.log.inputs, "--inputs"), split_names(a.log.outputs, "--outputs"));
-  const IoData all = load_log(a.log_path, log_options).data;
+  IoData all = load_log(a.log_path, log_options).data;
+  // Kept apart from the samples, which are moved into n4sid (peak memory: one copy of the log).
+  const std::vector<std::string> names = output_names(all), all_input_names = all.input_names,
+                                 all_output_names = all.output_names;
+  const double log_ts = all.Ts;
 
   // Estimation and validation data.
   IoData estimation;
@@ -137,16 +143,17 @@ void run_n4sid(const N4sidArgs& a) {
   }
   if (split_fraction) {
     DataSplit parts = split(all, *split_fraction);
+    all = IoData();  // free the samples: both parts hold copies
     estimation = std::move(parts.estimation);
     validation = std::move(parts.validation);
     validation_label = percent_label(*split_fraction);
   } else {
-    estimation = all;
+    estimation = std::move(all);
     if (!a.validate.empty()) {
       IoData v = load_log(a.validate, log_options).data;
-      if (std::abs(v.Ts - all.Ts) > 1e-6 * all.Ts)
+      if (std::abs(v.Ts - log_ts) > 1e-6 * log_ts)
         throw DataError(a.validate, 0, 0,
-                        "sample time " + fmt(v.Ts, 9) + " s differs from the estimation log's " + fmt(all.Ts, 9) + " s");
+                        "sample time " + fmt(v.Ts, 9) + " s differs from the estimation log's " + fmt(log_ts, 9) + " s");
       validation = std::move(v);
       validation_label = a.validate;
     }
@@ -165,8 +172,9 @@ void run_n4sid(const N4sidArgs& a) {
   // --band-limit: the Par2 remedy for gain the data do not determine above the
   // excited band (the model comes back in series with the low-pass at its inputs).
   if (a.band_limit_hz) options.band_limit_hz = *a.band_limit_hz;
+  options.band_limit_order = a.band_limit_order;
+  options.decimation = a.decimation == "auto" ? 0 : std::stoi(a.decimation);
 
-  const std::vector<std::string> names = output_names(all);
   std::ostringstream report;
   N4sidResult res;
   Eigen::VectorXd validation_fit;
@@ -205,7 +213,7 @@ void run_n4sid(const N4sidArgs& a) {
     res.order_rule = "best mean validation fit over orders " + std::to_string(order.lo) + ".." + std::to_string(order.hi);
     validation_fit = best->validation_fit;
   } else {
-    res = n4sid(estimation, options);
+    res = n4sid(std::move(estimation), options);
     if (validation) {
       CompareOptions co;
       co.input_offset = res.input_offset;
@@ -232,7 +240,15 @@ void run_n4sid(const N4sidArgs& a) {
   if (validation)
     report << "fit on validation data [%] (simulation, x0 estimated, " << validation_label << "):\n"
            << format_fit_lines(validation_fit, names);
-  report << "excited band: " << fmt(res.excited_band_low_hz, 4) << " .. " << fmt(res.excited_band_high_hz, 4) << " Hz\n";
+  report << "excited band: " << fmt(res.excited_band_low_hz, 4) << " .. " << fmt(res.excited_band_high_hz, 4) << " Hz";
+  if (res.decimation > 1) report << " (subspace step on a grid decimated by " << res.decimation << ")";
+  report << "\n";
+  report << "conditioning: cond(Gamma_i) " << fmt(res.observability_condition, 3) << ", smallest sin(angle) past/future inputs "
+         << fmt(res.past_future_min_sine, 3);
+  if (res.oblique_dropped_directions > 0)
+    report << " (" << res.oblique_dropped_directions << " past directions below " << fmt(options.oblique_min_sine, 3)
+           << " left out of the oblique projection)";
+  report << "\n";
   report << "modes:\n" << format_modal_table(modal_table(res.model));
   std::cout << report.str() << std::flush;
   for (const auto& w : res.warnings) warn(verb, w);
@@ -241,8 +257,8 @@ void run_n4sid(const N4sidArgs& a) {
   ModelFile file;
   file.type = "state-space";
   file.model = res.model;
-  file.model.input_names = all.input_names;
-  file.model.output_names = all.output_names;
+  file.model.input_names = all_input_names;
+  file.model.output_names = all_output_names;
   file.K = res.K;
   file.noise_covariance = res.noise_covariance;
   file.x0 = res.x0;
@@ -263,8 +279,14 @@ void run_n4sid(const N4sidArgs& a) {
   p["singular_values"] = to_json_list(res.singular_values);
   p["excited_band_hz"] = {res.excited_band_low_hz, res.excited_band_high_hz};
   p["hankel_route"] = to_string(res.route_used);
+  p["decimation"] = res.decimation;
+  p["observability_condition"] = res.observability_condition;
+  p["past_future_min_sine"] = res.past_future_min_sine;
   if (a.enforce_stability) p["enforce_stability"] = true;
-  if (a.band_limit_hz) p["band_limit_hz"] = *a.band_limit_hz;
+  if (a.band_limit_hz) {
+    p["band_limit_hz"] = *a.band_limit_hz;
+    p["band_limit_order"] = a.band_limit_order;
+  }
   p["sysid_version"] = SYSID_VERSION_STRING;
   write_model_json(a.out, file);
   note(verb, "wrote " + a.out);
@@ -322,6 +344,23 @@ Verb register_n4sid(CLI::App& app) {
                   "HZ: low-pass inputs and outputs (Butterworth) before identification and put the filter in series "
                   "with the model, so its gain above the excited band is not arbitrary (Par2 paper remedy)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--band-limit-order", args->band_limit_order, "order of the --band-limit Butterworth filter")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 20));
+  cmd->add_option("--decimation", args->decimation,
+                  "subspace step on a decimated grid: auto (when the inputs excite only the lowest quarter of the band), "
+                  "1 (never) or an odd factor R")
+      ->capture_default_str()
+      ->check(CLI::Validator(
+          [](std::string& s) -> std::string {
+            if (s == "auto") return {};
+            if (!s.empty() && s.size() < 6 && s.find_first_not_of("0123456789") == std::string::npos) {
+              const int r = std::stoi(s);
+              if (r == 1 || (r >= 3 && r % 2 == 1)) return {};
+            }
+            return "expected auto, 1 or an odd factor >= 3, found '" + s + "'";
+          },
+          "auto|1|R"));
   cmd->add_option("--out", args->out, "model file to write (JSON, with K, offsets, x0 and provenance)");
   cmd->footer(
       "Prints the order and the rule that chose it, the leading singular values, the\n"

@@ -224,21 +224,14 @@ inline CompareResult compare(const StateSpace& sys, const Eigen::MatrixXd& K, co
 }
 
 /// Purpose: the fit over every experiment of a data set (each with its own x0),
-/// computed on the concatenated outputs (so a long record weighs more).
+/// pooled over the experiments as if concatenated (so a long record weighs more).
 /// Preconditions: as compare(); options.estimate_x0 or one x0 for all experiments.
 inline Eigen::VectorXd compare_fit(const StateSpace& sys, const Eigen::MatrixXd& K, const IoData& data,
                                    const CompareOptions& options = {}) {
   data.validate();
-  const Eigen::Index total = data.total_samples(), l = data.outputs();
-  Eigen::MatrixXd y_all(total, l), yh_all(total, l);
-  Eigen::Index row = 0;
-  for (const Experiment& e : data.experiments) {
-    const CompareResult r = compare(sys, K, e, options);
-    y_all.middleRows(row, e.samples()) = e.y;
-    yh_all.middleRows(row, e.samples()) = r.y_hat;
-    row += e.samples();
-  }
-  return fit_percent(y_all, yh_all);
+  FitAccumulator fit(data.outputs());
+  for (const Experiment& e : data.experiments) fit.add_residual(e.y, e.y - compare(sys, K, e, options).y_hat);
+  return fit.fit_percent();
 }
 
 }  // namespace sysid

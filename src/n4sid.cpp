@@ -1,0 +1,602 @@
+// Implementation of subspace/n4sid.hpp (the method and its references are in the header).
+// Compiled once into libsysid: the Eigen decompositions below are heavy to instantiate.
+#include <sysid/subspace/n4sid.hpp>
+
+#include <Eigen/Dense>
+#include <sysid/core/discrete_riccati.hpp>
+#include <sysid/core/errors.hpp>
+#include <sysid/core/frequency_response.hpp>
+#include <sysid/core/interconnect.hpp>
+#include <sysid/core/io_data.hpp>
+#include <sysid/core/simulate.hpp>
+#include <sysid/core/state_space.hpp>
+#include <sysid/core/streaming_qr.hpp>
+#include <sysid/hankel/block_hankel.hpp>
+#include <sysid/signal/butterworth.hpp>
+#include <sysid/signal/sos_filter.hpp>
+#include <sysid/spectral/welch.hpp>
+#include <sysid/subspace/innovation_model.hpp>
+#include <sysid/validate/fit.hpp>
+
+#include <cmath>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace sysid {
+
+namespace detail {
+
+/// Orthonormal basis (columns) of the row space of `rows` (coefficient rows of L).
+inline Eigen::MatrixXd row_space_basis(const Eigen::MatrixXd& rows, double rel_tol) {
+  if (rows.rows() == 0) return Eigen::MatrixXd(rows.cols(), 0);
+  Eigen::BDCSVD<Eigen::MatrixXd> svd(rows.transpose(), Eigen::ComputeThinU);
+  const Eigen::VectorXd& s = svd.singularValues();
+  Eigen::Index rank = 0;
+  while (rank < s.size() && s(rank) > rel_tol * s(0)) ++rank;
+  return svd.matrixU().leftCols(rank);
+}
+
+/// Pseudo-inverse with relative rank tolerance.
+inline Eigen::MatrixXd pseudo_inverse(const Eigen::MatrixXd& m, double rel_tol) {
+  Eigen::BDCSVD<Eigen::MatrixXd> svd(m, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const Eigen::VectorXd& s = svd.singularValues();
+  Eigen::VectorXd inv = Eigen::VectorXd::Zero(s.size());
+  for (Eigen::Index k = 0; k < s.size(); ++k)
+    if (s(k) > rel_tol * s(0)) inv(k) = 1.0 / s(k);
+  return svd.matrixV() * inv.asDiagonal() * svd.matrixU().transpose();
+}
+
+/// Oblique projection of future outputs along future inputs onto the past, in
+/// coefficient space (VODM eq. 1.7 with M = W_p Pi_{U_f}^perp):
+///   O = Y_f M^+ W_p,   O Pi_{U_f}^perp = Y_f M^+ M.
+///
+/// O multiplies the regression coefficients Y_f M^+ by W_p, not by M, so a
+/// direction of the past that lies almost inside the span of the future inputs
+/// (small principal angle theta between row(W_p) and row(U_f)) gets its noise
+/// amplified by 1 / sin(theta). Band-limited inputs (a chirp or multisine that
+/// leaves part of the Nyquist band empty) produce such directions: past and
+/// future inputs are then nearly predictable from each other. This is the
+/// ill-conditioning analysed by A. Chiuso & G. Picci, "On the ill-conditioning
+/// of subspace identification with inputs", Automatica 40 (2004) 575-589.
+/// Here the rows of W_p are orthonormalised (W_p = T W, W W^T = I, which
+/// leaves O unchanged), the singular values of W Pi_{U_f}^perp are the sines of
+/// those principal angles, and directions with sin(theta) <= min_sine are left
+/// out of O: their effect cannot be told apart from that of the future inputs.
+/// The amplification of noise into O is then at most 1 / min_sine.
+/// O Pi_{U_f}^perp needs no such care: Y_f M^+ M is an orthogonal projection.
+struct ObliqueProjection {
+  Eigen::MatrixXd o;          ///< O_i
+  Eigen::MatrixXd o_perp;     ///< O_i Pi_{U_f}^perp
+  Eigen::MatrixXd yf_perp;    ///< Y_f Pi_{U_f}^perp (for the CVA weight)
+  double min_sine = 1;        ///< smallest sin(principal angle) between past data and future inputs
+  int dropped_directions = 0;  ///< past directions left out of O (sin(theta) <= min_sine option)
+};
+
+inline ObliqueProjection oblique_projection(const Eigen::MatrixXd& yf, const Eigen::MatrixXd& uf, const Eigen::MatrixXd& wp,
+                                            double rel_tol, double min_sine) {
+  const Eigen::MatrixXd vu = row_space_basis(uf, rel_tol);
+  auto perp = [&vu](const Eigen::MatrixXd& x) -> Eigen::MatrixXd { return x - (x * vu) * vu.transpose(); };
+  ObliqueProjection p;
+  const Eigen::MatrixXd m = perp(wp);
+  p.o_perp = yf * (pseudo_inverse(m, rel_tol) * m);
+  p.yf_perp = perp(yf);
+  const Eigen::MatrixXd w = row_space_basis(wp, rel_tol).transpose();
+  Eigen::BDCSVD<Eigen::MatrixXd> svd(perp(w), Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const Eigen::VectorXd& sines = svd.singularValues();
+  Eigen::VectorXd inv = Eigen::VectorXd::Zero(sines.size());
+  for (Eigen::Index k = 0; k < sines.size(); ++k) {
+    if (sines(k) > std::max(min_sine, rel_tol))
+      inv(k) = 1.0 / sines(k);
+    else
+      ++p.dropped_directions;
+  }
+  p.min_sine = sines.size() > 0 ? sines.minCoeff() : 1.0;
+  p.o = (yf * svd.matrixV()) * inv.asDiagonal() * (svd.matrixU().transpose() * w);
+  return p;
+}
+
+inline Eigen::MatrixXd vstack(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  Eigen::MatrixXd s(a.rows() + b.rows(), a.cols());
+  s << a, b;
+  return s;
+}
+
+/// Symmetric square root and inverse square root of a positive semidefinite matrix.
+inline std::pair<Eigen::MatrixXd, Eigen::MatrixXd> sqrt_and_inverse_sqrt(const Eigen::MatrixXd& g, double rel_tol) {
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (g + g.transpose()));
+  const Eigen::VectorXd ev = eig.eigenvalues().cwiseMax(0.0);
+  const double top = ev.maxCoeff();
+  Eigen::VectorXd root = ev.cwiseSqrt(), inv_root(ev.size());
+  for (Eigen::Index k = 0; k < ev.size(); ++k) inv_root(k) = ev(k) > rel_tol * top ? 1.0 / root(k) : 0.0;
+  const Eigen::MatrixXd& v = eig.eigenvectors();
+  return {v * root.asDiagonal() * v.transpose(), v * inv_root.asDiagonal() * v.transpose()};
+}
+
+/// B, D and one x0 per experiment minimising the simulation error with A, C
+/// fixed. The output is linear in them:
+///   y(t) = C A^t x0 + sum_{tau<t} C A^{t-1-tau} B u(tau) + D u(t).
+/// The regressor of B(p,q) at output r is Psi_q(t)(r,p) with the l x n recursion
+/// Psi_q(t+1) = Psi_q(t) A + u_q(t) C (cost l n^2 per input and step instead of
+/// n^3 for the state-side recursion); that of x0 is Lambda(t) = C A^t.
+/// Solved by a streaming QR of the stacked regression (never normal equations).
+struct BdxEstimate {
+  Eigen::MatrixXd B, D;
+  std::vector<Eigen::VectorXd> x0;
+  Eigen::Index samples_used = 0;
+  double condition = 0;
+};
+
+inline BdxEstimate estimate_bdx(const Eigen::MatrixXd& A, const Eigen::MatrixXd& C, const IoData& data, Eigen::Index max_samples) {
+  const Eigen::Index n = A.rows(), l = C.rows(), m = data.inputs();
+  const Eigen::Index experiments = static_cast<Eigen::Index>(data.experiments.size());
+  const Eigen::Index p = n * m + l * m + n * experiments;
+  StreamingQR qr(p + 1);
+  BdxEstimate out;
+  Eigen::MatrixXd rows(l, p + 1);
+  std::vector<Eigen::MatrixXd> psi(static_cast<std::size_t>(m));
+  for (Eigen::Index e = 0; e < experiments; ++e) {
+    const Experiment& ex = data.experiments[static_cast<std::size_t>(e)];
+    const Eigen::Index samples = std::min(ex.samples(), max_samples);
+    out.samples_used += samples;
+    for (auto& ps : psi) ps = Eigen::MatrixXd::Zero(l, n);
+    Eigen::MatrixXd lambda = C;
+    for (Eigen::Index t = 0; t < samples; ++t) {
+      rows.setZero();
+      for (Eigen::Index q = 0; q < m; ++q) rows.middleCols(q * n, n) = psi[static_cast<std::size_t>(q)];
+      for (Eigen::Index q = 0; q < m; ++q)
+        for (Eigen::Index r = 0; r < l; ++r) rows(r, n * m + q * l + r) = ex.u(t, q);
+      rows.middleCols(n * m + l * m + e * n, n) = lambda;
+      rows.col(p) = ex.y.row(t).transpose();
+      qr.add_rows(rows);
+      for (Eigen::Index q = 0; q < m; ++q) {
+        Eigen::MatrixXd& ps = psi[static_cast<std::size_t>(q)];
+        ps = ps * A + ex.u(t, q) * C;
+      }
+      lambda = lambda * A;
+    }
+  }
+  const Eigen::MatrixXd r = qr.r();
+  const Eigen::MatrixXd r11 = r.topLeftCorner(p, p);
+  const Eigen::VectorXd d = r11.diagonal().cwiseAbs();
+  out.condition = d.minCoeff() > 0 ? d.maxCoeff() / d.minCoeff() : std::numeric_limits<double>::infinity();
+  // Rank-revealing solve of the small triangular system (guards against an unexcited direction).
+  const Eigen::VectorXd theta = r11.completeOrthogonalDecomposition().solve(r.topRightCorner(p, 1));
+  out.B = Eigen::Map<const Eigen::MatrixXd>(theta.data(), n, m);
+  out.D = Eigen::Map<const Eigen::MatrixXd>(theta.data() + n * m, l, m);
+  for (Eigen::Index e = 0; e < experiments; ++e) out.x0.push_back(theta.segment(n * m + l * m + e * n, n));
+  return out;
+}
+
+/// The band [lo, hi] in which the inputs carry power: frequencies whose summed
+/// input PSD lies within 30 dB of its peak.
+inline std::pair<double, double> excited_band(const IoData& data) {
+  const Experiment& e = data.experiments.front();
+  WelchOptions wo;
+  wo.nfft = std::min<Eigen::Index>(4096, std::max<Eigen::Index>(64, e.samples() / 8));
+  const PowerSpectrum ps = welch_psd(e.u, 1.0 / data.Ts, wo);
+  const Eigen::VectorXd total = ps.psd.rowwise().sum();
+  const double threshold = total.maxCoeff() * 1e-3;
+  Eigen::Index lo = 0, hi = total.size() - 1;
+  while (lo < hi && total(lo) < threshold) ++lo;
+  while (hi > lo && total(hi) < threshold) --hi;
+  return {ps.freq_hz(lo), ps.freq_hz(hi)};
+}
+
+/// Largest singular value of the frequency response over [f0, f1] (grid of `points`).
+inline double peak_gain(const StateSpace& sys, double f0, double f1, int points) {
+  double peak = 0;
+  for (const Eigen::MatrixXcd& g : frequency_response(sys, Eigen::VectorXd::LinSpaced(points, f0, f1)))
+    peak = std::max(peak, Eigen::JacobiSVD<Eigen::MatrixXcd>(g).singularValues()(0));
+  return peak;
+}
+
+}  // namespace detail
+
+namespace detail {
+
+/// Steps 1-5 on mean-free, unit-RMS data: order, A, C, and (from the projections)
+/// B, D and the residual covariance.
+struct SubspaceCore {
+  Eigen::MatrixXd A, B, C, D, covariance;
+  Eigen::VectorXd singular_values, canonical_correlations;
+  int order = 0, horizon = 0;
+  std::string order_rule;
+  HankelRoute route_used = HankelRoute::qr;
+  double gram_condition_estimate = 0, observability_condition = 0, past_future_min_sine = 1;
+  int oblique_dropped_directions = 0;
+  std::vector<std::string> warnings;
+};
+
+inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& options) {
+  const Eigen::Index m = data.inputs(), l = data.outputs();
+  SubspaceCore res;
+  // Horizon.
+  const int n_max = options.order > 0 ? options.order : options.max_order;
+  int horizon = options.horizon;
+  if (horizon == 0) {
+    horizon = automatic_horizon(options.order, options.max_order, l);
+    // Keep at least ~4 Hankel columns per row so the projections are well determined.
+    Eigen::Index shortest = data.experiments.front().samples();
+    for (const auto& e : data.experiments) shortest = std::min(shortest, e.samples());
+    while (horizon > 2 && (2 * horizon > shortest || 4 * 2 * horizon * (m + l) > data.total_samples())) --horizon;
+  }
+  if (horizon < 2) throw std::invalid_argument("n4sid: need horizon >= 2");
+  // A user-given order must fit under the horizon; an automatic choice is capped by it.
+  if (options.order > 0 && static_cast<Eigen::Index>(horizon) * l <= n_max)
+    throw std::invalid_argument("n4sid: need horizon * outputs > order (" + std::to_string(horizon) + " * " + std::to_string(l) +
+                                " <= " + std::to_string(n_max) + "); increase --horizon");
+  res.horizon = horizon;
+  const Eigen::Index i = horizon;
+
+  BlockHankelOptions ho;
+  ho.horizon = horizon;
+  ho.route = options.route;
+  const BlockHankelCompression hc = compress_block_hankel(data, ho);
+  res.route_used = hc.route_used;
+  res.gram_condition_estimate = hc.gram_condition_estimate;
+  res.warnings.insert(res.warnings.end(), hc.warnings.begin(), hc.warnings.end());
+  const HankelLayout& lay = hc.layout;
+  const double tol = options.rank_tolerance;
+
+  // Step 2: oblique projections O_i and O_{i-1}.
+  const Eigen::MatrixXd yf = hc.l_rows(lay.y_rows(i, 2 * i - 1));
+  const Eigen::MatrixXd uf = hc.l_rows(lay.u_rows(i, 2 * i - 1));
+  const Eigen::MatrixXd wp = detail::vstack(hc.l_rows(lay.u_rows(0, i - 1)), hc.l_rows(lay.y_rows(0, i - 1)));
+  const detail::ObliqueProjection oi = detail::oblique_projection(yf, uf, wp, tol, options.oblique_min_sine);
+  res.past_future_min_sine = oi.min_sine;
+  res.oblique_dropped_directions = oi.dropped_directions;
+
+  // Step 3: weighted SVD. The CVA weight is always formed: its singular values
+  // are the canonical correlations between the future outputs (with the future
+  // inputs projected out) and the past, which the SVC order rule needs whatever
+  // weighting determines Gamma_i.
+  auto [cva_root, cva_inv_root] = detail::sqrt_and_inverse_sqrt(oi.yf_perp * oi.yf_perp.transpose(), tol);
+  const Eigen::MatrixXd cva_weighted = cva_inv_root * oi.o_perp;
+  Eigen::MatrixXd weighted, w1_inv;
+  switch (options.weighting) {
+    case SubspaceWeighting::n4sid: weighted = oi.o; break;
+    case SubspaceWeighting::moesp: weighted = oi.o_perp; break;
+    case SubspaceWeighting::cva:
+      weighted = cva_weighted;
+      w1_inv = cva_root;
+      break;
+  }
+  Eigen::BDCSVD<Eigen::MatrixXd> svd(weighted, Eigen::ComputeThinU);
+  res.singular_values = svd.singularValues();
+  res.canonical_correlations = options.weighting == SubspaceWeighting::cva
+                                   ? res.singular_values
+                                   : Eigen::VectorXd(Eigen::BDCSVD<Eigen::MatrixXd>(cva_weighted).singularValues());
+  if (options.order > 0) {
+    res.order = options.order;
+    res.order_rule = "given by the user";
+  } else {
+    const int top = std::min<int>(options.max_order, static_cast<int>(i * l) - 1);
+    const OrderChoice choice = options.order_rule == OrderRule::svc
+                                   ? choose_order_by_svc(res.canonical_correlations, top, hc.columns, l, m)
+                                   : choose_order_by_gap(res.singular_values, top);
+    res.order = choice.order;
+    res.order_rule = choice.rule;
+    if (res.order < 1) throw NumericalError("n4sid: the singular values show no dynamics (order 0 chosen)");
+  }
+  const Eigen::Index n = res.order;
+  if (n >= res.singular_values.size() || res.singular_values(n - 1) <= tol * res.singular_values(0))
+    throw NumericalError("n4sid: order " + std::to_string(n) +
+                         " exceeds the rank of the projection (the data do not support it); choose a lower order");
+
+  // Step 4: Gamma_i, C, A.
+  const Eigen::VectorXd s1_root = res.singular_values.head(n).cwiseSqrt();
+  Eigen::MatrixXd gamma = svd.matrixU().leftCols(n) * s1_root.asDiagonal();
+  if (options.weighting == SubspaceWeighting::cva) gamma = w1_inv * gamma;
+  {
+    Eigen::JacobiSVD<Eigen::MatrixXd> gs(gamma);
+    const auto& g = gs.singularValues();
+    res.observability_condition = g(g.size() - 1) > 0 ? g(0) / g(g.size() - 1) : std::numeric_limits<double>::infinity();
+  }
+  const Eigen::MatrixXd C = gamma.topRows(l);
+  const Eigen::MatrixXd gamma_up = gamma.topRows((i - 1) * l);
+  Eigen::MatrixXd A;
+  if (options.enforce_stability) {
+    Eigen::MatrixXd shifted = Eigen::MatrixXd::Zero(i * l, n);
+    shifted.topRows((i - 1) * l) = gamma.bottomRows((i - 1) * l);
+    A = gamma.completeOrthogonalDecomposition().solve(shifted);
+  } else {
+    A = gamma_up.completeOrthogonalDecomposition().solve(gamma.bottomRows((i - 1) * l));
+  }
+
+  // Step 5: states, B and D from the projections, noise covariances, Kalman gain.
+  const Eigen::MatrixXd yf1 = hc.l_rows(lay.y_rows(i + 1, 2 * i - 1));
+  const Eigen::MatrixXd uf1 = hc.l_rows(lay.u_rows(i + 1, 2 * i - 1));
+  const Eigen::MatrixXd wp1 = detail::vstack(hc.l_rows(lay.u_rows(0, i)), hc.l_rows(lay.y_rows(0, i)));
+  const detail::ObliqueProjection oi1 = detail::oblique_projection(yf1, uf1, wp1, tol, options.oblique_min_sine);
+  const auto gamma_cod = gamma.completeOrthogonalDecomposition();
+  const Eigen::MatrixXd xi = gamma_cod.solve(oi.o);
+  const Eigen::MatrixXd xi1 = gamma_up.completeOrthogonalDecomposition().solve(oi1.o);
+  const Eigen::MatrixXd uii = hc.l_rows(lay.u_rows(i, i));
+  const Eigen::MatrixXd yii = hc.l_rows(lay.y_rows(i, i));
+  const Eigen::MatrixXd lhs = detail::vstack(xi1 - A * xi, yii - C * xi);
+  // [B; D] = lhs * uii^+ (least squares over the coefficient columns), via QR of uii^T.
+  const Eigen::MatrixXd bd = uii.transpose().colPivHouseholderQr().solve(lhs.transpose()).transpose();
+  Eigen::MatrixXd B = bd.topRows(n), D = bd.bottomRows(l);
+  const Eigen::MatrixXd rho = lhs - bd * uii;
+  const Eigen::MatrixXd cov = rho * rho.transpose() / static_cast<double>(hc.columns);
+
+  res.A = A;
+  res.B = B;
+  res.C = C;
+  res.D = D;
+  res.covariance = cov;
+  return res;
+}
+
+/// Odd decimation factor for oversampled data (see N4sidOptions::decimation), 1 = none.
+inline int decimation_factor(double fs, double f_high, int requested) {
+  if (requested == 1) return 1;
+  if (requested > 1) {
+    if (requested % 2 == 0) throw std::invalid_argument("n4sid: need an odd decimation factor (real r-th roots of every pole)");
+    return requested;
+  }
+  if (!(f_high > 0)) return 1;
+  int r = static_cast<int>(std::floor(fs / (4.0 * f_high)));
+  if (r % 2 == 0) --r;
+  return r >= 3 ? r : 1;
+}
+
+/// Zero-phase low-pass (8th-order Butterworth at 0.8 x the new Nyquist
+/// frequency) of inputs and outputs alike, which leaves the input-output
+/// relation unchanged, then every r-th sample.
+inline IoData decimate(const IoData& data, int r) {
+  IoData out;
+  out.Ts = data.Ts * r;
+  out.input_names = data.input_names;
+  out.output_names = data.output_names;
+  const double fs = 1.0 / data.Ts;
+  const SecondOrderSections lp = butterworth(8, BandType::lowpass, 0.8 * fs / (2.0 * r), 0.0, fs);
+  for (const auto& e : data.experiments) {
+    const Eigen::MatrixXd uf = filtfilt(lp, e.u), yf = filtfilt(lp, e.y);
+    const Eigen::Index n = (e.samples() + r - 1) / r;
+    Experiment d{Eigen::MatrixXd(n, e.u.cols()), Eigen::MatrixXd(n, e.y.cols()), e.source};
+    for (Eigen::Index k = 0; k < n; ++k) {
+      d.u.row(k) = uf.row(k * r);
+      d.y.row(k) = yf.row(k * r);
+    }
+    out.experiments.push_back(std::move(d));
+  }
+  return out;
+}
+
+/// Principal real r-th root of A (r odd): the discrete poles at the original
+/// rate, z = z_d^(1/r) for complex poles (same continuous-time s = log(z)/Ts),
+/// the real root for real poles. Via the eigendecomposition; NumericalError if
+/// A is defective (eigenvector matrix ill-conditioned).
+inline Eigen::MatrixXd principal_root(const Eigen::MatrixXd& a, int r) {
+  Eigen::EigenSolver<Eigen::MatrixXd> eig(a);
+  const Eigen::MatrixXcd v = eig.eigenvectors();
+  Eigen::VectorXcd lambda = eig.eigenvalues();
+  Eigen::JacobiSVD<Eigen::MatrixXcd> vs(v);
+  const auto& sv = vs.singularValues();
+  if (!(sv(sv.size() - 1) > 1e-10 * sv(0)))
+    throw NumericalError("n4sid: the decimated model has a defective A; rerun with --decimation 1");
+  for (Eigen::Index k = 0; k < lambda.size(); ++k) {
+    const std::complex<double> z = lambda(k);
+    if (std::abs(z.imag()) <= 1e-14 * std::abs(z))
+      lambda(k) = std::copysign(std::pow(std::abs(z.real()), 1.0 / r), z.real());
+    else
+      lambda(k) = std::pow(z, 1.0 / r);  // principal branch, conjugates stay conjugate
+  }
+  const Eigen::MatrixXcd root = v * lambda.asDiagonal() * v.inverse();
+  return root.real();
+}
+
+}  // namespace detail
+
+N4sidResult n4sid(IoData data, const N4sidOptions& options) {
+  data.validate();
+  const Eigen::Index m = data.inputs(), l = data.outputs();
+  if (m < 1) throw std::invalid_argument("n4sid: need at least one input");
+  if (options.order < 0) throw std::invalid_argument("n4sid: need order >= 0 (0 = automatic)");
+  if (options.order == 0 && options.max_order < 1) throw std::invalid_argument("n4sid: need max_order >= 1");
+
+  N4sidResult res;
+  res.weighting = options.weighting;
+  res.input_offset = Eigen::VectorXd::Zero(m);
+  res.output_offset = Eigen::VectorXd::Zero(l);
+  if (options.remove_means) {
+    const ChannelOffsets off = remove_means(data);
+    res.input_offset = off.input;
+    res.output_offset = off.output;
+  }
+  std::optional<SecondOrderSections> band_limit;
+  if (options.band_limit_hz > 0) {
+    if (options.band_limit_order < 1) throw std::invalid_argument("n4sid: need band_limit_order >= 1");
+    band_limit = butterworth(options.band_limit_order, BandType::lowpass, options.band_limit_hz, 0.0, 1.0 / data.Ts);
+    for (auto& e : data.experiments) {
+      e.u = sos_filter(*band_limit, e.u);
+      e.y = sos_filter(*band_limit, e.y);
+    }
+  }
+  // Excitation check and unit-RMS scaling.
+  const double total = static_cast<double>(data.total_samples());
+  Eigen::VectorXd su = Eigen::VectorXd::Zero(m), sy = Eigen::VectorXd::Zero(l);
+  for (const auto& e : data.experiments) {
+    su += e.u.colwise().squaredNorm().transpose();
+    sy += e.y.colwise().squaredNorm().transpose();
+  }
+  su = (su / total).cwiseSqrt();
+  sy = (sy / total).cwiseSqrt();
+  for (Eigen::Index q = 0; q < m; ++q)
+    if (!(su(q) > options.constant_input_tolerance * std::max(1.0, std::abs(res.input_offset(q)))))
+      throw DataError("input '" + data.input_name(q) + "' is constant: it does not excite the system");
+  for (Eigen::Index r = 0; r < l; ++r)
+    if (!(sy(r) > 0)) throw DataError("output '" + data.output_name(r) + "' is constant: nothing to identify");
+  for (auto& e : data.experiments) {
+    e.u = e.u * su.cwiseInverse().asDiagonal();
+    e.y = e.y * sy.cwiseInverse().asDiagonal();
+  }
+
+  const double nyquist = 0.5 / data.Ts;
+  auto [band_lo, band_hi] = detail::excited_band(data);
+  res.excited_band_low_hz = band_lo;
+  res.excited_band_high_hz = band_hi;
+  res.decimation = detail::decimation_factor(1.0 / data.Ts, band_hi, options.decimation);
+  detail::SubspaceCore core;
+  // The order is chosen at a horizon sized for max_order; the model of that
+  // order is then identified at the horizon sized for it (unless the user fixed one).
+  auto identify = [&options](const IoData& d) {
+    detail::SubspaceCore c = detail::subspace_core(d, options);
+    if (options.order == 0 && options.horizon == 0 &&
+        detail::automatic_horizon(c.order, options.max_order, d.outputs()) != c.horizon) {
+      N4sidOptions second = options;
+      second.order = c.order;
+      detail::SubspaceCore fixed = detail::subspace_core(d, second);
+      fixed.order_rule = c.order_rule + " at horizon " + std::to_string(c.horizon);
+      fixed.singular_values = c.singular_values;
+      fixed.canonical_correlations = c.canonical_correlations;
+      c = std::move(fixed);
+    }
+    return c;
+  };
+  if (res.decimation > 1) {
+    core = identify(detail::decimate(data, res.decimation));
+    core.A = detail::principal_root(core.A, res.decimation);
+    res.warnings.push_back("n4sid: the inputs excite only 0.." + std::to_string(band_hi) + " Hz of " + std::to_string(nyquist) +
+                           " Hz: identified on a grid decimated by " + std::to_string(res.decimation) +
+                           " (A mapped back by its principal root, B, D, x0 fitted at the original rate)");
+  } else {
+    core = identify(data);
+  }
+  res.singular_values = core.singular_values;
+  res.canonical_correlations = core.canonical_correlations;
+  res.order = core.order;
+  res.horizon = core.horizon;
+  res.order_rule = core.order_rule;
+  res.route_used = core.route_used;
+  res.gram_condition_estimate = core.gram_condition_estimate;
+  res.observability_condition = core.observability_condition;
+  res.past_future_min_sine = core.past_future_min_sine;
+  res.oblique_dropped_directions = core.oblique_dropped_directions;
+  res.warnings.insert(res.warnings.end(), core.warnings.begin(), core.warnings.end());
+  const Eigen::Index n = res.order;
+  const Eigen::MatrixXd& A = core.A;
+  const Eigen::MatrixXd& C = core.C;
+  Eigen::MatrixXd B = core.B, D = core.D;
+  const Eigen::MatrixXd& cov = core.covariance;
+
+  Eigen::MatrixXd K, innovation = cov.bottomRightCorner(l, l);
+  if (options.estimate_kalman_gain && res.decimation == 1) {
+    const KalmanFilterResult kf =
+        steady_state_kalman_filter(A, C, cov.topLeftCorner(n, n), cov.bottomRightCorner(l, l), cov.topRightCorner(n, l));
+    res.kalman_iterations = kf.iterations;
+    if (kf.status == KalmanFilterResult::Status::converged) {
+      K = kf.K;
+      innovation = kf.innovation_covariance;
+    } else {
+      res.warnings.push_back("n4sid: Kalman gain not computed: " + kf.message);
+    }
+  }
+
+  // Step 6: B, D, x0 on the simulation error.
+  std::vector<Eigen::VectorXd> x0(data.experiments.size(), Eigen::VectorXd::Zero(n));
+  if (options.refine_bdx) {
+    const detail::BdxEstimate bdx = detail::estimate_bdx(A, C, data, options.bdx_max_samples);
+    B = bdx.B;
+    D = bdx.D;
+    x0 = bdx.x0;
+    res.bdx_samples_used = bdx.samples_used;
+    if (bdx.samples_used < data.total_samples())
+      res.warnings.push_back("n4sid: B, D and x0 were fitted on the first " + std::to_string(options.bdx_max_samples) +
+                             " samples of each experiment (bdx_max_samples)");
+    if (bdx.condition > 1e10)
+      res.warnings.push_back("n4sid: the B/D/x0 regression is ill-conditioned (" + std::to_string(bdx.condition) +
+                             "); some input directions are poorly excited");
+  }
+
+  // Fit on the estimation data (scaled units: fit % is scale-invariant). The
+  // data are mean-free after scaling only when remove_means is on, so the
+  // spread is accumulated about the overall mean; one experiment's simulation
+  // is held at a time unless its residuals are needed for the noise model.
+  // On a decimated grid the projections give K at the wrong rate: the noise
+  // model comes from the residuals at the original rate instead
+  // (subspace/innovation_model.hpp).
+  const bool noise_model_from_residuals = options.estimate_kalman_gain && res.decimation > 1;
+  std::vector<Eigen::MatrixXd> residuals;
+  {
+    const StateSpace scaled(A, B, C, D, data.Ts);
+    FitAccumulator fit(l);
+    for (std::size_t e = 0; e < data.experiments.size(); ++e) {
+      const Experiment& ex = data.experiments[e];
+      Eigen::MatrixXd residual = ex.y - simulate(scaled, ex.u, x0[e]);
+      fit.add_residual(ex.y, residual);
+      if (noise_model_from_residuals) residuals.push_back(std::move(residual));
+    }
+    res.fit_percent = fit.fit_percent();
+  }
+  if (noise_model_from_residuals) {
+    const InnovationModelResult nm = innovation_model(A, C, residuals);
+    residuals.clear();
+    res.kalman_iterations = nm.iterations;
+    if (nm.status == InnovationModelResult::Status::converged) {
+      K = nm.K;
+      innovation = nm.innovation_covariance;
+    } else {
+      innovation = nm.innovation_covariance;
+      res.warnings.push_back("n4sid: Kalman gain not computed: " + nm.message);
+    }
+  }
+
+  // Back to original units: u_s = u / su, y_s = y / sy.
+  const Eigen::MatrixXd su_inv = su.cwiseInverse().asDiagonal();
+  res.model = StateSpace(A, B * su_inv, sy.asDiagonal() * C, sy.asDiagonal() * D * su_inv, data.Ts);
+  res.model.input_names = data.input_names;
+  res.model.output_names = data.output_names;
+  if (K.size() > 0) res.K = K * sy.cwiseInverse().asDiagonal();
+  res.noise_covariance = sy.asDiagonal() * innovation * sy.asDiagonal();
+  res.x0 = x0.front();
+  if (band_limit) {
+    // Filter at the inputs: one copy per input channel. The filtered data's x0
+    // belongs to the unfiltered model states; the filter starts at rest.
+    const StateSpace filter = sos_to_state_space(*band_limit);
+    const StateSpace filters = block_diagonal(std::vector<StateSpace>(static_cast<std::size_t>(m), filter));
+    StateSpace limited = series(filters, res.model);
+    limited.input_names = res.model.input_names;
+    limited.output_names = res.model.output_names;
+    Eigen::VectorXd x0_all = Eigen::VectorXd::Zero(limited.order());
+    x0_all.tail(res.model.order()) = res.x0;
+    if (res.K.size() > 0) {
+      Eigen::MatrixXd k_all = Eigen::MatrixXd::Zero(limited.order(), l);
+      k_all.bottomRows(res.model.order()) = res.K;
+      res.K = k_all;
+    }
+    res.model = limited;
+    res.x0 = x0_all;
+    res.band_limited = true;
+  }
+  if (!A.allFinite() || !res.model.B.allFinite() || !res.model.D.allFinite())
+    throw NumericalError("n4sid: the identified matrices contain NaN or Inf");
+
+  // Stability and band checks.
+  const Eigen::VectorXcd ev = A.eigenvalues();
+  const double radius = ev.cwiseAbs().maxCoeff();
+  if (radius >= 1.0)
+    res.warnings.push_back("n4sid: the identified model is unstable (spectral radius " + std::to_string(radius) +
+                           "); consider enforce_stability");
+  const double lo = band_lo, hi = band_hi;
+  if (hi < 0.8 * nyquist) {
+    const double in_band = detail::peak_gain(res.model, std::max(lo, 0.0), hi, 200);
+    const double out_band = detail::peak_gain(res.model, std::min(1.2 * hi, nyquist), nyquist, 200);
+    res.out_of_band_gain_ratio = in_band > 0 ? out_band / in_band : 0.0;
+    if (res.out_of_band_gain_ratio > 0.5) {
+      std::ostringstream w;
+      w.precision(3);
+      w << "n4sid: the inputs excite only " << lo << ".." << hi << " Hz, but the model's gain above " << 1.2 * hi
+        << " Hz reaches " << res.out_of_band_gain_ratio
+        << " x its in-band peak: that gain is not determined by the data. Remedy (Par2 paper): band-limit the data and the "
+           "model with a Butterworth low-pass (--band-limit)";
+      res.warnings.push_back(w.str());
+    }
+  }
+  return res;
+}
+
+}  // namespace sysid
