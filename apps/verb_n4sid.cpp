@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "cli_common.hpp"
+#include "plot.hpp"
 #include "verbs.hpp"
 
 namespace sysid::cli {
@@ -39,7 +40,49 @@ struct N4sidArgs {
   int band_limit_order = N4sidOptions{}.band_limit_order;
   std::string decimation = "auto";
   std::string out;
+  std::string plot;
 };
+
+/// The singular values (and, when present, the canonical correlations of the SVC
+/// rule) that chose the order, with the chosen order marked.
+void plot_order_choice(const N4sidArgs& a, const N4sidResult& res) {
+  auto panel = [&](const Eigen::VectorXd& v, const std::string& title, const std::string& ylabel, bool logy) {
+    PlotPanel p;
+    p.title = title;
+    p.xlabel = "index";
+    p.ylabel = ylabel;
+    p.logy = logy;
+    PlotCurve c, mark;
+    c.title = ylabel;
+    c.style = "linespoints";
+    c.x = Eigen::VectorXd::LinSpaced(v.size(), 1.0, static_cast<double>(v.size()));
+    c.y = v;
+    if (logy)
+      for (Eigen::Index k = 0; k < v.size(); ++k)
+        if (!(v(k) > 0.0)) c.y(k) = NAN;  // a log axis has no zero
+    p.curves.push_back(std::move(c));
+    if (res.order >= 1 && res.order <= v.size()) {
+      mark.title = "chosen order " + std::to_string(res.order);
+      mark.style = "impulses";
+      mark.color = 1;
+      mark.x = Eigen::VectorXd::Constant(1, static_cast<double>(res.order));
+      mark.y = Eigen::VectorXd::Constant(1, v(res.order - 1));
+      if (logy) {  // impulses on a log axis start at the bottom: draw a point instead
+        mark.style = "points";
+        mark.point_type = 6;
+      }
+      p.curves.push_back(std::move(mark));
+    }
+    return p;
+  };
+  PlotFigure fig;
+  fig.title = "order choice for " + a.log_path + ": " + res.order_rule;
+  fig.panels.push_back(panel(res.singular_values, "singular values of the weighted projection", "singular value", true));
+  if (res.canonical_correlations.size() > 0)
+    fig.panels.push_back(panel(res.canonical_correlations, "canonical correlations (SVC rule)", "canonical correlation", false));
+  fig.height_per_row = 320;
+  write_plot(fig, a.plot, "n4sid");
+}
 
 /// --order: N, auto, or A:B.
 struct OrderSpec {
@@ -123,6 +166,7 @@ void run_n4sid(const N4sidArgs& a) {
   std::vector<std::string> inputs_files{a.log_path};
   if (!a.validate.empty()) inputs_files.push_back(a.validate);
   if (!a.out.empty()) refuse_to_overwrite_input(a.out, inputs_files);
+  if (!a.plot.empty()) refuse_to_overwrite_input(a.plot, inputs_files);
 
   const LogOptions log_options =
       make_log_options(a.log, split_names(a.log.inputs, "--inputs"), split_names(a.log.outputs, "--outputs"));
@@ -253,7 +297,10 @@ void run_n4sid(const N4sidArgs& a) {
   std::cout << report.str() << std::flush;
   for (const auto& w : res.warnings) warn(verb, w);
 
-  if (a.out.empty()) return;
+  if (a.out.empty()) {
+    if (!a.plot.empty()) plot_order_choice(a, res);
+    return;
+  }
   ModelFile file;
   file.type = "state-space";
   file.model = res.model;
@@ -290,6 +337,7 @@ void run_n4sid(const N4sidArgs& a) {
   p["sysid_version"] = SYSID_VERSION_STRING;
   write_model_json(a.out, file);
   note(verb, "wrote " + a.out);
+  if (!a.plot.empty()) plot_order_choice(a, res);
 }
 
 }  // namespace
@@ -362,6 +410,9 @@ Verb register_n4sid(CLI::App& app) {
           },
           "auto|1|R"));
   cmd->add_option("--out", args->out, "model file to write (JSON, with K, offsets, x0 and provenance)");
+  cmd->add_option("--plot", args->plot,
+                  "plot of the singular values (and canonical correlations) that chose the order (.svg or .png; needs gnuplot)")
+      ->check(plot_path_validator());
   cmd->footer(
       "Prints the order and the rule that chose it, the leading singular values, the\n"
       "simulation fit on estimation and validation data, the excited band and the modes.\n"

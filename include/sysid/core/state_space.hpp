@@ -52,7 +52,8 @@ struct StateSpace {
     if (C.cols() != n) throw std::invalid_argument("state-space: C must have " + std::to_string(n) + " columns, is " + dims(C));
     if (D.rows() != C.rows() || D.cols() != B.cols())
       throw std::invalid_argument("state-space: D must be " + std::to_string(C.rows()) + "x" + std::to_string(B.cols()) + ", is " + dims(D));
-    if (B.cols() == 0 || C.rows() == 0) throw std::invalid_argument("state-space: need at least one input and one output");
+    // No inputs is allowed: a time-series (AR/ARMA) model is all noise model.
+    if (C.rows() == 0) throw std::invalid_argument("state-space: need at least one output");
     if (!(Ts >= 0.0) || !std::isfinite(Ts)) throw std::invalid_argument("state-space: Ts must be >= 0 and finite");
     if (!A.allFinite() || !B.allFinite() || !C.allFinite() || !D.allFinite())
       throw std::invalid_argument("state-space: matrices contain NaN or Inf");

@@ -1,0 +1,475 @@
+// Implementation of pem/prediction_error.hpp (method and references in the header).
+#include <sysid/core/errors.hpp>
+#include <sysid/core/streaming_qr.hpp>
+#include <sysid/pem/arx.hpp>
+#include <sysid/pem/lagged_regression.hpp>
+#include <sysid/pem/prediction_error.hpp>
+#include <sysid/signal/polynomial_filter.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <tuple>
+
+namespace sysid {
+
+std::string structure_name(int na, const std::vector<int>& nb, int nc, int nd, const std::vector<int>& nf) {
+  const bool inputs = std::any_of(nb.begin(), nb.end(), [](int k) { return k > 0; });
+  const bool f = std::any_of(nf.begin(), nf.end(), [](int k) { return k > 0; });
+  if (!inputs) return nc > 0 ? (nd > 0 ? "polynomial" : "arma") : (nd > 0 ? "polynomial" : "ar");
+  if (f) return na == 0 && nc == 0 && nd == 0 ? "oe" : (na == 0 ? "bj" : "polynomial");
+  if (nd > 0) return "polynomial";
+  return nc > 0 ? "armax" : "arx";
+}
+
+Eigen::VectorXd pack_parameters(const PolynomialModel& model) {
+  Eigen::Index p = model.na() + model.nc() + model.nd();
+  for (Eigen::Index i = 0; i < model.inputs(); ++i) p += model.nb(i) + model.nf(i);
+  Eigen::VectorXd theta(p);
+  Eigen::Index at = 0;
+  auto put = [&](const Eigen::VectorXd& v) {
+    theta.segment(at, v.size()) = v;
+    at += v.size();
+  };
+  put(model.A.tail(model.na()));
+  for (const auto& b : model.B) put(b);
+  put(model.C.tail(model.nc()));
+  put(model.D.tail(model.nd()));
+  for (const auto& f : model.F) put(f.tail(f.size() - 1));
+  return theta;
+}
+
+void unpack_parameters(const Eigen::VectorXd& theta, PolynomialModel& model) {
+  if (theta.size() != pack_parameters(model).size()) throw std::invalid_argument("pem: parameter vector of the wrong size");
+  Eigen::Index at = 0;
+  auto take = [&](Eigen::VectorXd& v, Eigen::Index first) {
+    v.segment(first, v.size() - first) = theta.segment(at, v.size() - first);
+    at += v.size() - first;
+  };
+  take(model.A, 1);
+  for (auto& b : model.B) take(b, 0);
+  take(model.C, 1);
+  take(model.D, 1);
+  for (auto& f : model.F) take(f, 1);
+}
+
+Eigen::VectorXcd polynomial_roots(const Eigen::VectorXd& monic) {
+  const Eigen::Index n = monic.size() - 1;
+  if (n <= 0) return Eigen::VectorXcd();
+  Eigen::MatrixXd companion = Eigen::MatrixXd::Zero(n, n);
+  companion.row(0) = -monic.tail(n).transpose();
+  if (n > 1) companion.bottomLeftCorner(n - 1, n - 1).setIdentity();
+  return companion.eigenvalues();
+}
+
+Eigen::VectorXd reflect_into_unit_circle(const Eigen::VectorXd& monic) {
+  Eigen::VectorXcd roots = polynomial_roots(monic);
+  bool changed = false;
+  for (auto& z : roots)
+    if (std::abs(z) >= 1.0) {
+      z = 1.0 / std::conj(z) * (std::abs(z) == 1.0 ? 0.999 : 1.0);  // a root on the circle is pulled just inside
+      changed = true;
+    }
+  if (!changed) return monic;
+  // Rebuild [1, p_1..p_n] from the roots: prod (1 - z_k q^-1).
+  Eigen::VectorXcd poly = Eigen::VectorXcd::Zero(roots.size() + 1);
+  poly(0) = 1.0;
+  for (Eigen::Index k = 0; k < roots.size(); ++k)
+    for (Eigen::Index j = k + 1; j >= 1; --j) poly(j) -= roots(k) * poly(j - 1);
+  return poly.real();
+}
+
+namespace {
+
+bool strictly_stable(const Eigen::VectorXd& monic) {
+  if (monic.size() <= 1) return true;
+  const Eigen::VectorXcd r = polynomial_roots(monic);
+  return r.cwiseAbs().maxCoeff() < 1.0 - 1e-10;
+}
+
+bool denominators_stable(const PolynomialModel& m) {
+  if (!strictly_stable(m.C) || !strictly_stable(m.D)) return false;
+  for (const auto& f : m.F)
+    if (!strictly_stable(f)) return false;
+  return true;
+}
+
+/// x delayed by k samples (zeros first): x(t - k).
+Eigen::VectorXd shifted(const Eigen::VectorXd& x, Eigen::Index k) {
+  Eigen::VectorXd s = Eigen::VectorXd::Zero(x.size());
+  if (k < x.size()) s.tail(x.size() - k) = x.head(x.size() - k);
+  return s;
+}
+
+}  // namespace
+
+PredictionErrors prediction_errors(const PolynomialModel& model, const Eigen::MatrixXd& u, const Eigen::VectorXd& y,
+                                   bool with_jacobian) {
+  const Eigen::Index m = model.inputs(), n = y.size();
+  if (u.cols() != m || (m > 0 && u.rows() != n)) throw std::invalid_argument("pem: u and y do not match the model");
+  const Eigen::VectorXd one = Eigen::VectorXd::Ones(1);
+  // w_i = B_i / F_i u_i(t - nk_i);  v = A y - sum w_i;  eps = D / C v.
+  std::vector<Eigen::VectorXd> w(static_cast<std::size_t>(m));
+  Eigen::VectorXd v = filter_polynomial(model.A, one, y);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    if (model.nb(i) == 0) {
+      w[k] = Eigen::VectorXd::Zero(n);
+      continue;
+    }
+    w[k] = filter_polynomial(detail::delayed(model.B[k], model.nk[k]), model.F[k], u.col(i));
+    v -= w[k];
+  }
+  PredictionErrors out;
+  out.eps = filter_polynomial(model.D, model.C, v);
+  if (!with_jacobian) return out;
+  const Eigen::Index p = pack_parameters(model).size();
+  out.jacobian.resize(n, p);
+  Eigen::Index col = 0;
+  if (model.na() > 0) {
+    const Eigen::VectorXd gy = filter_polynomial(model.D, model.C, y);
+    for (int k = 1; k <= model.na(); ++k) out.jacobian.col(col++) = shifted(gy, k);
+  }
+  std::vector<Eigen::VectorXd> cf(static_cast<std::size_t>(m));
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    cf[k] = detail::polynomial_product(model.C, model.F[k]);
+    if (model.nb(i) == 0) continue;
+    const Eigen::VectorXd gu = filter_polynomial(model.D, cf[k], u.col(i));
+    for (int j = 0; j < model.nb(i); ++j) out.jacobian.col(col++) = -shifted(gu, model.nk[k] + j);
+  }
+  if (model.nc() > 0) {
+    const Eigen::VectorXd ge = filter_polynomial(one, model.C, out.eps);
+    for (int k = 1; k <= model.nc(); ++k) out.jacobian.col(col++) = -shifted(ge, k);
+  }
+  if (model.nd() > 0) {
+    const Eigen::VectorXd gv = filter_polynomial(one, model.C, v);
+    for (int k = 1; k <= model.nd(); ++k) out.jacobian.col(col++) = shifted(gv, k);
+  }
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    if (model.nf(i) == 0) continue;
+    const Eigen::VectorXd gw = filter_polynomial(model.D, cf[k], w[k]);
+    for (int j = 1; j <= model.nf(i); ++j) out.jacobian.col(col++) = shifted(gw, j);
+  }
+  return out;
+}
+
+namespace {
+
+struct ScaledRecord {
+  Eigen::MatrixXd u;
+  Eigen::VectorXd y;
+};
+
+double cost_of(const PolynomialModel& model, const std::vector<ScaledRecord>& records) {
+  double v = 0;
+  for (const auto& r : records) v += 0.5 * prediction_errors(model, r.u, r.y, false).eps.squaredNorm();
+  return v;
+}
+
+/// R factor of [J eps] over all records ((p+1) x (p+1)).
+Eigen::MatrixXd jacobian_factor(const PolynomialModel& model, const std::vector<ScaledRecord>& records, Eigen::Index p) {
+  StreamingQR qr(p + 1);
+  for (const auto& r : records) {
+    PredictionErrors pe = prediction_errors(model, r.u, r.y, true);
+    Eigen::MatrixXd rows(pe.eps.size(), p + 1);
+    rows.leftCols(p) = pe.jacobian;
+    rows.col(p) = pe.eps;
+    qr.add_rows(rows);
+  }
+  return qr.r();
+}
+
+/// ARX of the given orders on the scaled records (target y, inputs u), with optional extra noise regressors.
+RegressionSolution arx_regression(const std::vector<ScaledRecord>& records, int na, const std::vector<int>& nb,
+                                  const std::vector<int>& nk, const std::vector<Eigen::VectorXd>* noise, int nc) {
+  const Eigen::Index m = static_cast<Eigen::Index>(nb.size());
+  std::vector<Eigen::MatrixXd> signals;
+  for (std::size_t e = 0; e < records.size(); ++e) {
+    const auto& r = records[e];
+    Eigen::MatrixXd s(r.y.size(), 1 + m + (noise ? 1 : 0));
+    s.col(0) = r.y;
+    if (m > 0) s.middleCols(1, m) = r.u;
+    if (noise) s.col(1 + m) = (*noise)[e];
+    signals.push_back(std::move(s));
+  }
+  std::vector<RegressionTerm> terms{{0, 1, na, -1.0}};
+  for (Eigen::Index i = 0; i < m; ++i) terms.push_back({1 + i, nk[static_cast<std::size_t>(i)], nb[static_cast<std::size_t>(i)], 1.0});
+  if (noise) terms.push_back({1 + m, 1, nc, 1.0});
+  return lagged_least_squares(signals, 0, terms);
+}
+
+/// Hannan-Rissanen start of ARMA/ARMAX (scaled units).
+void hannan_rissanen(PolynomialModel& model, const std::vector<ScaledRecord>& records, int high_order) {
+  const Eigen::Index m = model.inputs();
+  std::vector<int> nb_high(static_cast<std::size_t>(m), high_order);
+  for (Eigen::Index i = 0; i < m; ++i)
+    if (model.nb(i) == 0) nb_high[static_cast<std::size_t>(i)] = 0;
+  const RegressionSolution high = arx_regression(records, high_order, nb_high, model.nk, nullptr, 0);
+  PolynomialModel h = model;
+  h.A = Eigen::VectorXd(high_order + 1);
+  h.A << 1.0, high.theta.head(high_order);
+  Eigen::Index at = high_order;
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    h.B[k] = high.theta.segment(at, nb_high[k]);
+    at += nb_high[k];
+  }
+  h.C = Eigen::VectorXd::Ones(1);
+  h.D = Eigen::VectorXd::Ones(1);
+  std::vector<Eigen::VectorXd> residuals;
+  for (const auto& r : records) residuals.push_back(prediction_errors(h, r.u, r.y, false).eps);
+  std::vector<int> nb(static_cast<std::size_t>(m));
+  for (Eigen::Index i = 0; i < m; ++i) nb[static_cast<std::size_t>(i)] = model.nb(i);
+  const RegressionSolution sol = arx_regression(records, model.na(), nb, model.nk, &residuals, model.nc());
+  Eigen::VectorXd theta = pack_parameters(model);
+  // Same order as pack_parameters for ARMAX (a, b, c) since D and F are trivial here.
+  theta.head(sol.theta.size()) = sol.theta;
+  unpack_parameters(theta, model);
+  model.C = reflect_into_unit_circle(model.C);
+}
+
+/// OE start: ARX for F and B, then Steiglitz-McBride passes (scaled units).
+void output_error_start(PolynomialModel& model, const std::vector<ScaledRecord>& records, int passes,
+                        std::vector<std::string>& warnings) {
+  const Eigen::Index m = model.inputs();
+  std::vector<int> nb(static_cast<std::size_t>(m));
+  int nf_max = 0;
+  bool equal = true;
+  for (Eigen::Index i = 0; i < m; ++i) {
+    nb[static_cast<std::size_t>(i)] = model.nb(i);
+    if (i > 0 && model.nf(i) != model.nf(0)) equal = false;
+    nf_max = std::max(nf_max, model.nf(i));
+  }
+  if (!equal) {
+    // Different denominators: each input's F from its own single-input ARX (the others act as noise).
+    for (Eigen::Index i = 0; i < m; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      std::vector<ScaledRecord> single;
+      for (const auto& r : records) single.push_back({r.u.col(i), r.y});
+      const RegressionSolution sol = arx_regression(single, model.nf(i), {model.nb(i)}, {model.nk[k]}, nullptr, 0);
+      model.F[k] = Eigen::VectorXd(model.nf(i) + 1);
+      model.F[k] << 1.0, sol.theta.head(model.nf(i));
+      model.F[k] = reflect_into_unit_circle(model.F[k]);
+      model.B[k] = sol.theta.tail(model.nb(i));
+    }
+    warnings.push_back("pem: inputs with different nf: OE started from single-input ARX fits (no Steiglitz-McBride passes)");
+    return;
+  }
+  Eigen::VectorXd f = Eigen::VectorXd::Ones(1);
+  for (int pass = 0; pass <= passes; ++pass) {
+    // Pass 0: plain ARX; later passes: the data filtered by 1 / F of the previous pass.
+    std::vector<ScaledRecord> filtered;
+    for (const auto& r : records)
+      filtered.push_back({filter_polynomial(Eigen::VectorXd::Ones(1), f, r.u), filter_polynomial(Eigen::VectorXd::Ones(1), f, r.y)});
+    const RegressionSolution sol = arx_regression(filtered, nf_max, nb, model.nk, nullptr, 0);
+    f = Eigen::VectorXd(nf_max + 1);
+    f << 1.0, sol.theta.head(nf_max);
+    f = reflect_into_unit_circle(f);
+    Eigen::Index at = nf_max;
+    for (Eigen::Index i = 0; i < m; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      model.B[k] = sol.theta.segment(at, model.nb(i));
+      model.F[k] = f;
+      at += model.nb(i);
+    }
+  }
+}
+
+double scaled_condition(const Eigen::MatrixXd& r11) {
+  Eigen::VectorXd norms = r11.colwise().norm().transpose();
+  for (Eigen::Index k = 0; k < norms.size(); ++k)
+    if (!(norms(k) > 0)) norms(k) = 1.0;
+  const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(r11 * norms.cwiseInverse().asDiagonal()).singularValues();
+  return sv(sv.size() - 1) > 0 ? sv(0) / sv(sv.size() - 1) : std::numeric_limits<double>::infinity();
+}
+
+}  // namespace
+
+PemResult pem(IoData data, const PemOptions& options) {
+  data.validate();
+  const Eigen::Index m = data.inputs(), l = data.outputs();
+  if (options.output < 0 || options.output >= l) throw std::invalid_argument("pem: output index out of range");
+  if (options.na < 0 || options.nc < 0 || options.nd < 0) throw std::invalid_argument("pem: need na, nc, nd >= 0");
+  if (static_cast<Eigen::Index>(options.nb.size()) != m)
+    throw std::invalid_argument("pem: need one nb per input (" + std::to_string(options.nb.size()) + " given for " +
+                                std::to_string(m) + " inputs)");
+  std::vector<int> nf = options.nf.empty() ? std::vector<int>(static_cast<std::size_t>(m), 0) : options.nf;
+  if (static_cast<Eigen::Index>(nf.size()) != m) throw std::invalid_argument("pem: need one nf per input");
+  for (Eigen::Index i = 0; i < m; ++i)
+    if (options.nb[static_cast<std::size_t>(i)] < 0 || nf[static_cast<std::size_t>(i)] < 0)
+      throw std::invalid_argument("pem: need nb, nf >= 0");
+  const std::vector<int> nk = detail::input_delays(options.nk, m);
+  const bool has_f = std::any_of(nf.begin(), nf.end(), [](int k) { return k > 0; });
+  if (has_f && options.na > 0) throw std::invalid_argument("pem: an A polynomial together with F is not supported (use na = 0)");
+  if (options.max_iterations < 0) throw std::invalid_argument("pem: need max_iterations >= 0");
+
+  PemResult res;
+  res.structure = structure_name(options.na, options.nb, options.nc, options.nd, nf);
+  std::tie(res.input_offset, res.output_offset) = detail::remove_means_if(data, options.remove_means);
+
+  // Scaled records of the chosen output.
+  const double total = static_cast<double>(data.total_samples());
+  Eigen::VectorXd su = Eigen::VectorXd::Zero(m);
+  double sy = 0;
+  for (const auto& e : data.experiments) {
+    su += e.u.colwise().squaredNorm().transpose();
+    sy += e.y.col(options.output).squaredNorm();
+  }
+  su = (su / total).cwiseSqrt();
+  sy = std::sqrt(sy / total);
+  if (!(sy > 0)) throw DataError("pem: output '" + data.output_name(options.output) + "' is constant");
+  for (Eigen::Index i = 0; i < m; ++i)
+    if (!(su(i) > 0)) throw DataError("pem: input '" + data.input_name(i) + "' is constant: it does not excite the system");
+  std::vector<ScaledRecord> records;
+  for (const auto& e : data.experiments)
+    records.push_back({e.u * su.cwiseInverse().asDiagonal(), e.y.col(options.output) / sy});
+
+  PolynomialModel model;
+  model.Ts = data.Ts;
+  model.A = Eigen::VectorXd::Zero(options.na + 1);
+  model.A(0) = 1.0;
+  model.C = Eigen::VectorXd::Zero(options.nc + 1);
+  model.C(0) = 1.0;
+  model.D = Eigen::VectorXd::Zero(options.nd + 1);
+  model.D(0) = 1.0;
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    model.B.push_back(Eigen::VectorXd::Zero(options.nb[k]));
+    model.nk.push_back(nk[k]);
+    model.F.push_back(Eigen::VectorXd::Zero(nf[k] + 1));
+    model.F.back()(0) = 1.0;
+  }
+  const Eigen::Index p = pack_parameters(model).size();
+  if (p == 0) throw std::invalid_argument("pem: need at least one parameter");
+  if (static_cast<double>(p) >= total) throw std::invalid_argument("pem: more parameters than samples");
+
+  // Initial values.
+  if (has_f) {
+    output_error_start(model, records, options.steiglitz_mcbride_iterations, res.warnings);
+  } else if (options.nc > 0) {
+    int max_nb = 0;
+    for (int b : options.nb) max_nb = std::max(max_nb, b);
+    int high = options.initial_arx_order;
+    if (high == 0) {
+      high = std::max(3 * std::max({options.na, max_nb, options.nc}), 20);
+      high = std::min<int>(high, static_cast<int>(total / 20.0));
+    }
+    if (high <= options.nc) throw std::invalid_argument("pem: too few samples for the Hannan-Rissanen start of these orders");
+    hannan_rissanen(model, records, high);
+  } else {
+    std::vector<int> nb(options.nb.begin(), options.nb.end());
+    const RegressionSolution sol = arx_regression(records, options.na, nb, nk, nullptr, 0);
+    Eigen::VectorXd theta = pack_parameters(model);
+    theta.head(sol.theta.size()) = sol.theta;
+    unpack_parameters(theta, model);
+  }
+
+  // Levenberg-Marquardt.
+  Eigen::VectorXd theta = pack_parameters(model);
+  double cost = cost_of(model, records);
+  res.initial_cost = cost;
+  res.cost_history.push_back(cost);
+  double lambda = 1e-3, nu = 2.0;
+  Eigen::MatrixXd r = jacobian_factor(model, records, p);
+  res.status = PemResult::Status::max_iterations;
+  res.termination = "reached max_iterations (" + std::to_string(options.max_iterations) + ")";
+  int iteration = 0;
+  bool need_factor = false;
+  while (iteration < options.max_iterations) {
+    if (need_factor) r = jacobian_factor(model, records, p);
+    need_factor = false;
+    const Eigen::MatrixXd r11 = r.topLeftCorner(p, p).triangularView<Eigen::Upper>();
+    const Eigen::VectorXd r12 = r.col(p).head(p);
+    const Eigen::VectorXd gradient = r11.transpose() * r12;  // J^T eps
+    if (gradient.cwiseAbs().maxCoeff() <= options.gradient_tolerance * (1.0 + cost)) {
+      res.status = PemResult::Status::converged;
+      res.termination = "gradient below tolerance";
+      break;
+    }
+    ++iteration;
+    // Marquardt scaling by the column norms of J (= those of R11).
+    Eigen::VectorXd scale = r11.colwise().norm().transpose();
+    for (Eigen::Index k = 0; k < p; ++k) scale(k) = std::max(scale(k), 1e-12 * std::max(1.0, scale.maxCoeff()));
+    bool accepted = false;
+    while (!accepted) {
+      Eigen::MatrixXd stacked(2 * p, p);
+      stacked << r11, std::sqrt(lambda) * scale.asDiagonal().toDenseMatrix();
+      Eigen::VectorXd rhs = Eigen::VectorXd::Zero(2 * p);
+      rhs.head(p) = -r12;
+      const Eigen::VectorXd step = stacked.householderQr().solve(rhs);
+      const double predicted = 0.5 * (r12.squaredNorm() - (r11 * step + r12).squaredNorm());
+      PolynomialModel trial = model;
+      unpack_parameters(theta + step, trial);
+      double trial_cost = std::numeric_limits<double>::infinity();
+      if (denominators_stable(trial)) trial_cost = cost_of(trial, records);
+      const double rho = predicted > 0 ? (cost - trial_cost) / predicted : -1.0;
+      if (std::isfinite(trial_cost) && rho > 0) {
+        const double decrease = cost - trial_cost;
+        const bool small_step = step.norm() <= options.parameter_tolerance * (theta.norm() + options.parameter_tolerance);
+        theta += step;
+        model = trial;
+        cost = trial_cost;
+        res.cost_history.push_back(cost);
+        lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
+        nu = 2.0;
+        accepted = true;
+        need_factor = true;
+        if (decrease <= options.function_tolerance * cost) {
+          res.status = PemResult::Status::converged;
+          res.termination = "relative cost decrease below tolerance";
+        } else if (small_step) {
+          res.status = PemResult::Status::converged;
+          res.termination = "step below tolerance";
+        }
+      } else {
+        lambda *= nu;
+        nu *= 2.0;
+        if (lambda > 1e16) break;
+      }
+    }
+    if (res.status == PemResult::Status::converged) break;
+    if (!accepted) {
+      // No damped step lowers the cost: at a minimum to working precision, or stuck.
+      const bool flat = gradient.cwiseAbs().maxCoeff() <= 1e-6 * (1.0 + cost);
+      res.status = flat ? PemResult::Status::converged : PemResult::Status::failed;
+      res.termination = flat ? "no step lowers the cost further (minimum to working precision)"
+                             : "no step lowers the cost although the gradient is not small (damping limit reached)";
+      break;
+    }
+  }
+  res.iterations = iteration;
+  res.final_cost = cost;
+  if (need_factor) r = jacobian_factor(model, records, p);
+
+  // Covariance sigma^2 (J^T J)^-1 and conditioning at the solution (scaled units).
+  const Eigen::MatrixXd r11 = r.topLeftCorner(p, p).triangularView<Eigen::Upper>();
+  res.condition = scaled_condition(r11);
+  const double sigma2 = 2.0 * cost / std::max(1.0, total - static_cast<double>(p));
+  const Eigen::MatrixXd r_inv = r11.completeOrthogonalDecomposition().pseudoInverse();
+  Eigen::MatrixXd covariance = sigma2 * r_inv * r_inv.transpose();
+  if (res.condition > 1e10)
+    res.warnings.push_back("pem: the Jacobian is ill-conditioned at the solution (condition " + std::to_string(res.condition) +
+                           "): some parameters are poorly determined (orders too high, or common factors)");
+
+  // Back to original units: B_i scales by sy / su_i, the variance by sy^2.
+  Eigen::VectorXd unit = Eigen::VectorXd::Ones(p);
+  {
+    Eigen::Index at = model.na();
+    for (Eigen::Index i = 0; i < m; ++i) {
+      const double s = sy / su(i);
+      model.B[static_cast<std::size_t>(i)] *= s;
+      unit.segment(at, model.nb(i)).setConstant(s);
+      at += model.nb(i);
+    }
+  }
+  res.covariance = unit.asDiagonal() * covariance * unit.asDiagonal();
+  model.noise_variance = sigma2 * sy * sy;
+  res.model = model;
+  res.model.validate();
+  return res;
+}
+
+}  // namespace sysid

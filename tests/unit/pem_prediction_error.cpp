@@ -1,0 +1,164 @@
+// Prediction-error identification (pem/prediction_error.hpp): the analytic
+// Jacobian against central finite differences for every structure; ARMAX,
+// ARMA and OE recover their parameters within the reported standard errors;
+// the stability helpers; bad orders rejected.
+#include <sysid/pem/prediction_error.hpp>
+#include <sysid/signal/polynomial_filter.hpp>
+
+#include <gtest/gtest.h>
+
+#include "random_systems.hpp"
+
+using namespace sysid;
+
+namespace {
+
+PolynomialModel make_model(Eigen::VectorXd a, std::vector<Eigen::VectorXd> b, std::vector<int> nk, std::vector<Eigen::VectorXd> f,
+                           Eigen::VectorXd c, Eigen::VectorXd d) {
+  PolynomialModel pm;
+  pm.A = std::move(a);
+  pm.B = std::move(b);
+  pm.nk = std::move(nk);
+  pm.F = std::move(f);
+  pm.C = std::move(c);
+  pm.D = std::move(d);
+  return pm;
+}
+
+/// y from the model's defining equation with white e (filtered from rest).
+Eigen::VectorXd simulate_polynomial(const PolynomialModel& pm, const Eigen::MatrixXd& u, const Eigen::VectorXd& e) {
+  Eigen::VectorXd rhs = filter_polynomial(pm.C, pm.D, e).col(0);
+  for (Eigen::Index i = 0; i < pm.inputs(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    Eigen::VectorXd num = Eigen::VectorXd::Zero(pm.B[k].size() + pm.nk[k]);
+    num.tail(pm.B[k].size()) = pm.B[k];
+    rhs += filter_polynomial(num, pm.F[k], u.col(i)).col(0);
+  }
+  return filter_polynomial(Eigen::VectorXd::Ones(1), pm.A, rhs).col(0);
+}
+
+const Eigen::VectorXd kOne = Eigen::VectorXd::Ones(1);
+
+void expect_jacobian_matches_finite_differences(const PolynomialModel& pm) {
+  const Eigen::MatrixXd u = test::white_noise(300, pm.inputs(), 7);
+  const Eigen::VectorXd y = test::white_noise(300, 1, 8).col(0) + simulate_polynomial(pm, u, Eigen::VectorXd::Zero(300));
+  const PredictionErrors pe = prediction_errors(pm, u, y, true);
+  const Eigen::VectorXd theta = pack_parameters(pm);
+  ASSERT_EQ(pe.jacobian.cols(), theta.size());
+  for (Eigen::Index k = 0; k < theta.size(); ++k) {
+    const double h = 1e-6;
+    PolynomialModel plus = pm, minus = pm;
+    Eigen::VectorXd tp = theta, tm = theta;
+    tp(k) += h;
+    tm(k) -= h;
+    unpack_parameters(tp, plus);
+    unpack_parameters(tm, minus);
+    const Eigen::VectorXd fd = (prediction_errors(plus, u, y, false).eps - prediction_errors(minus, u, y, false).eps) / (2 * h);
+    // Central differences: truncation O(h^2), rounding O(eps / h) relative to the signal size.
+    EXPECT_LT((fd - pe.jacobian.col(k)).norm(), 1e-6 * (1.0 + fd.norm())) << "parameter " << k;
+  }
+}
+
+}  // namespace
+
+TEST(PredictionError, JacobianOfArmaxMatchesFiniteDifferences) {
+  expect_jacobian_matches_finite_differences(make_model(Eigen::Vector3d(1.0, -1.5, 0.7), {Eigen::Vector2d(1.0, 0.5), Eigen::Vector2d(-0.3, 0.2)},
+                                                       {1, 0}, {kOne, kOne}, Eigen::Vector2d(1.0, 0.4), kOne));
+}
+
+TEST(PredictionError, JacobianOfOutputErrorAndBoxJenkinsMatchesFiniteDifferences) {
+  expect_jacobian_matches_finite_differences(
+      make_model(kOne, {Eigen::Vector2d(1.0, 0.5)}, {2}, {Eigen::Vector3d(1.0, -1.2, 0.6)}, kOne, kOne));
+  expect_jacobian_matches_finite_differences(make_model(kOne, {Eigen::Vector2d(1.0, 0.5), Eigen::Vector3d(0.1, 0.2, 0.3)}, {1, 1},
+                                                       {Eigen::Vector3d(1.0, -1.2, 0.6), Eigen::Vector2d(1.0, -0.5)},
+                                                       Eigen::Vector2d(1.0, 0.3), Eigen::Vector3d(1.0, -0.9, 0.2)));
+}
+
+TEST(PredictionError, JacobianOfArmaMatchesFiniteDifferences) {
+  expect_jacobian_matches_finite_differences(make_model(Eigen::Vector3d(1.0, -0.9, 0.5), {}, {}, {}, Eigen::Vector3d(1.0, 0.5, 0.2), kOne));
+}
+
+TEST(PredictionError, ArmaxRecoversItsParameters) {
+  const PolynomialModel truth = make_model(Eigen::Vector3d(1.0, -1.5, 0.7), {Eigen::Vector2d(1.0, 0.5)}, {1}, {kOne},
+                                           Eigen::Vector3d(1.0, -0.6, 0.2), kOne);
+  const Eigen::Index n = 20000;
+  const Eigen::MatrixXd u = test::white_noise(n, 1, 11);
+  const Eigen::VectorXd y = simulate_polynomial(truth, u, test::white_noise(n, 1, 12, 0.5).col(0));
+  PemOptions opt;
+  opt.na = 2;
+  opt.nb = {2};
+  opt.nc = 2;
+  opt.nk = {1};
+  const PemResult r = pem(IoData(u, y, 1.0), opt);
+  ASSERT_EQ(r.status, PemResult::Status::converged) << r.termination;
+  EXPECT_EQ(r.structure, "armax");
+  EXPECT_LE(r.final_cost, r.initial_cost);
+  const Eigen::VectorXd err = pack_parameters(r.model) - pack_parameters(truth);
+  for (Eigen::Index k = 0; k < err.size(); ++k) EXPECT_LT(std::abs(err(k)), 4.0 * std::sqrt(r.covariance(k, k))) << "parameter " << k;
+  EXPECT_NEAR(r.model.noise_variance, 0.25, 0.25 * 0.05);
+}
+
+TEST(PredictionError, ArmaRecoversItsParameters) {
+  const PolynomialModel truth = make_model(Eigen::Vector3d(1.0, -0.9, 0.5), {}, {}, {}, Eigen::Vector2d(1.0, 0.7), kOne);
+  const Eigen::Index n = 20000;
+  const Eigen::VectorXd y = simulate_polynomial(truth, Eigen::MatrixXd(n, 0), test::white_noise(n, 1, 13).col(0));
+  PemOptions opt;
+  opt.na = 2;
+  opt.nc = 1;
+  const PemResult r = pem(IoData(Eigen::MatrixXd(n, 0), y, 1.0), opt);
+  ASSERT_EQ(r.status, PemResult::Status::converged) << r.termination;
+  EXPECT_EQ(r.structure, "arma");
+  const Eigen::VectorXd err = pack_parameters(r.model) - pack_parameters(truth);
+  for (Eigen::Index k = 0; k < err.size(); ++k) EXPECT_LT(std::abs(err(k)), 4.0 * std::sqrt(r.covariance(k, k))) << "parameter " << k;
+}
+
+TEST(PredictionError, OutputErrorRecoversItsParametersFromColouredInput) {
+  // OE with a lightly damped F and a low-pass input: the ARX start is biased,
+  // the prediction-error minimum is not.
+  const PolynomialModel truth = make_model(kOne, {Eigen::Vector2d(0.5, 0.3)}, {1}, {Eigen::Vector3d(1.0, -1.6, 0.9)}, kOne, kOne);
+  const Eigen::Index n = 10000;
+  const Eigen::MatrixXd u = filter_polynomial(Eigen::VectorXd::Ones(1), Eigen::Vector2d(1.0, -0.7), test::white_noise(n, 1, 14));
+  const Eigen::VectorXd y = simulate_polynomial(truth, u, test::white_noise(n, 1, 15, 0.5).col(0));
+  PemOptions opt;
+  opt.nb = {2};
+  opt.nf = {2};
+  opt.nk = {1};
+  const PemResult r = pem(IoData(u, y, 1.0), opt);
+  ASSERT_EQ(r.status, PemResult::Status::converged) << r.termination;
+  EXPECT_EQ(r.structure, "oe");
+  EXPECT_GT(r.iterations, 0);
+  EXPECT_LT(r.final_cost, r.initial_cost);  // the Gauss-Newton iterations improve on the Steiglitz-McBride start
+  const Eigen::VectorXd err = pack_parameters(r.model) - pack_parameters(truth);
+  for (Eigen::Index k = 0; k < err.size(); ++k) EXPECT_LT(std::abs(err(k)), 4.0 * std::sqrt(r.covariance(k, k))) << "parameter " << k;
+}
+
+TEST(PredictionError, ReflectionKeepsTheMagnitudeShape) {
+  // 1 + 2.5 q^-1 has its root at -2.5; its spectral factor 1 + 0.4 q^-1 has the
+  // same |.| up to the constant 2.5.
+  const Eigen::VectorXd reflected = reflect_into_unit_circle(Eigen::Vector2d(1.0, 2.5));
+  EXPECT_NEAR(reflected(1), 0.4, 1e-12);
+  EXPECT_LT(polynomial_roots(reflected).cwiseAbs().maxCoeff(), 1.0);
+  const Eigen::Vector3d stable(1.0, -0.5, 0.06);
+  EXPECT_LT((reflect_into_unit_circle(stable) - stable).norm(), 1e-15);
+}
+
+TEST(PredictionError, BadOrdersAreRejected) {
+  const IoData data(test::white_noise(200, 1, 1), test::white_noise(200, 1, 2), 1.0);
+  PemOptions opt;
+  opt.na = 2;
+  opt.nb = {2, 2};
+  EXPECT_THROW(pem(data, opt), std::invalid_argument);  // one nb per input
+  opt.nb = {2};
+  opt.nk = {-1};
+  EXPECT_THROW(pem(data, opt), std::invalid_argument);  // negative delay
+  opt.nk = {1};
+  opt.nc = -1;
+  EXPECT_THROW(pem(data, opt), std::invalid_argument);
+  opt.nc = 1;
+  opt.nf = {2};
+  EXPECT_THROW(pem(data, opt), std::invalid_argument);  // A together with F
+  opt = PemOptions{};
+  opt.na = 150;
+  opt.nb = {150};
+  EXPECT_THROW(pem(data, opt), std::invalid_argument);  // more parameters than the data support
+}

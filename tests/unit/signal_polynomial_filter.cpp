@@ -1,0 +1,41 @@
+// filter_polynomial (signal/polynomial_filter.hpp) against the difference
+// equation written out, and the impulse response of a first-order section.
+#include <sysid/signal/polynomial_filter.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "random_systems.hpp"
+
+using namespace sysid;
+
+TEST(PolynomialFilter, MatchesTheDifferenceEquation) {
+  Eigen::VectorXd num(3), den(4);
+  num << 0.5, -0.2, 0.1;
+  den << 1.0, -1.2, 0.5, -0.1;
+  const Eigen::MatrixXd x = test::white_noise(500, 2, 3);
+  const Eigen::MatrixXd y = filter_polynomial(num, den, x);
+  for (Eigen::Index c = 0; c < 2; ++c)
+    for (Eigen::Index t = 0; t < 500; ++t) {
+      double expected = 0;
+      for (Eigen::Index k = 0; k < num.size(); ++k)
+        if (t - k >= 0) expected += num(k) * x(t - k, c);
+      for (Eigen::Index k = 1; k < den.size(); ++k)
+        if (t - k >= 0) expected -= den(k) * y(t - k, c);
+      ASSERT_NEAR(y(t, c), expected, 1e-12 * (1 + std::abs(expected)));
+    }
+}
+
+TEST(PolynomialFilter, FirstOrderImpulseResponse) {
+  Eigen::VectorXd impulse = Eigen::VectorXd::Zero(30);
+  impulse(0) = 1.0;
+  const Eigen::MatrixXd h = filter_polynomial(Eigen::VectorXd::Ones(1), Eigen::Vector2d(1.0, -0.5), impulse);
+  for (Eigen::Index k = 0; k < 30; ++k) EXPECT_DOUBLE_EQ(h(k, 0), std::pow(0.5, static_cast<double>(k)));
+}
+
+TEST(PolynomialFilter, RejectsANonMonicDenominator) {
+  EXPECT_THROW(filter_polynomial(Eigen::VectorXd::Ones(1), Eigen::Vector2d(2.0, 1.0), Eigen::VectorXd::Ones(5)),
+               std::invalid_argument);
+  EXPECT_THROW(filter_polynomial(Eigen::VectorXd(), Eigen::VectorXd::Ones(1), Eigen::VectorXd::Ones(5)), std::invalid_argument);
+}
