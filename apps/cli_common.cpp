@@ -198,4 +198,46 @@ nlohmann::json to_json_list(const Eigen::VectorXd& v) {
   return j;
 }
 
+void add_validation_options(CLI::App& cmd, std::string& validate, std::optional<double>& split) {
+  CLI::Option* val =
+      cmd.add_option("--validate", validate, "validation log (same columns): identify on LOG, report the fit on FILE");
+  CLI::Option* spl = cmd.add_option("--split", split, "identify on the first fraction F of LOG, validate on the rest (0 < F < 1)")
+                         ->check(CLI::Validator(
+                             [](std::string& s) -> std::string {
+                               try {
+                                 const double f = std::stod(s);
+                                 if (f > 0.0 && f < 1.0) return {};
+                               } catch (const std::exception&) {
+                               }
+                               return "expected a fraction 0 < F < 1, found '" + s + "'";
+                             },
+                             "F"));
+  val->excludes(spl);
+}
+
+EstimationData load_estimation_data(const std::string& log_path, const std::string& validate, std::optional<double> split,
+                                    const LogOptions& options) {
+  EstimationData out;
+  IoData all = load_log(log_path, options).data;
+  if (split) {
+    DataSplit parts = sysid::split(all, *split);
+    all = IoData();  // free the samples: both parts hold copies
+    out.estimation = std::move(parts.estimation);
+    out.validation = std::move(parts.validation);
+    out.validation_label = "last " + fmt(100.0 * (1.0 - *split), 3) + "% of samples";
+    out.split = split;
+    return out;
+  }
+  const double ts = all.Ts;
+  out.estimation = std::move(all);
+  if (!validate.empty()) {
+    IoData v = load_log(validate, options).data;
+    if (std::abs(v.Ts - ts) > 1e-6 * ts)
+      throw DataError(validate, 0, 0, "sample time " + fmt(v.Ts, 9) + " s differs from the estimation log's " + fmt(ts, 9) + " s");
+    out.validation = std::move(v);
+    out.validation_label = validate;
+  }
+  return out;
+}
+
 }  // namespace sysid::cli

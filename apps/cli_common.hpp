@@ -91,4 +91,21 @@ void note(const std::string& verb, const std::string& message);
 /// Vector of doubles -> JSON list (NaN written as null: JSON has no NaN).
 nlohmann::json to_json_list(const Eigen::VectorXd& v);
 
+/// Estimation data and, when the user asked for it, validation data.
+struct EstimationData {
+  IoData estimation;
+  std::optional<IoData> validation;
+  std::string validation_label;  ///< the validation file, or "last 30% of samples"
+  std::optional<double> split;   ///< the split fraction used, if any
+};
+
+/// --validate FILE and --split F (mutually exclusive) on an identification verb.
+void add_validation_options(CLI::App& cmd, std::string& validate, std::optional<double>& split);
+
+/// Loads LOG; with `split`, its first fraction is the estimation data and the rest
+/// validation; with `validate`, that file (same columns, same sample time, else
+/// DataError) is the validation data. The log's samples are moved, not copied.
+EstimationData load_estimation_data(const std::string& log_path, const std::string& validate, std::optional<double> split,
+                                    const LogOptions& options);
+
 }  // namespace sysid::cli

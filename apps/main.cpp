@@ -58,12 +58,16 @@ int main(int argc, char** argv) {
       "Exit codes: 0 success, 1 usage error, 2 bad input data or model file, 3 numerical failure.\n"
       "Example:\n"
       "  sysid excite --signal multisine --fs 1000 --band 1:200 --samples 20000 --out u.csv\n"
-      "  sysid n4sid log.csv --inputs u --outputs y --split 0.7 --out model.json");
+      "  sysid n4sid log.csv --inputs u --outputs y --split 0.7 --out model.json\n"
+      "  sysid frf log.csv --inputs u --outputs y --nfft 4096 --out frf.csv --plot frf.svg");
 
   std::vector<sysid::cli::Verb> verbs;
   try {
     verbs = {sysid::cli::register_n4sid(app), sysid::cli::register_simulate(app), sysid::cli::register_compare(app),
-             sysid::cli::register_show(app), sysid::cli::register_excite(app)};
+             sysid::cli::register_show(app), sysid::cli::register_excite(app),
+             sysid::cli::register_resid(app), sysid::cli::register_frf(app), sysid::cli::register_psd(app),
+             sysid::cli::register_filter(app), sysid::cli::register_arx(app), sysid::cli::register_ar(app),
+             sysid::cli::register_armax(app), sysid::cli::register_arma(app), sysid::cli::register_oe(app)};
   } catch (const std::exception& e) {  // a bug in an option definition
     std::cerr << "sysid: internal error: " << e.what() << "\n";
     return 3;

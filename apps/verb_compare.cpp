@@ -1,10 +1,14 @@
 // sysid compare: fit % of a model on a log, by simulation or k-step prediction.
+#include <sysid/io/atomic_file.hpp>
 #include <sysid/validate/compare.hpp>
+#include <sysid/validate/frequency_compare.hpp>
 
 #include <iostream>
 #include <memory>
+#include <numbers>
 
 #include "cli_common.hpp"
+#include "plot.hpp"
 #include "verbs.hpp"
 
 namespace sysid::cli {
@@ -16,12 +20,91 @@ struct CompareArgs {
   LogArgs log;
   int predict = 0;
   std::string x0 = "estimate";
-  // Room for the frequency-domain comparison (issue 3): --band LO:HI will restrict
-  // the fit to a band (both signals band-pass filtered); not implemented yet.
+  std::string band;  ///< LO:HI: frequency-domain comparison against the data's H1
+  Eigen::Index nfft = 1024;
+  std::string plot;
 };
+
+/// Outputs drawn in the time-series plot at most.
+constexpr Eigen::Index kMaxPlotOutputs = 6;
+/// Pairs drawn in the Bode overlay at most.
+constexpr Eigen::Index kMaxPlotPairs = 4;
+
+/// Time-series overlay (measured vs model) per output, and with the band the Bode
+/// overlay of the model and the data's estimate.
+void plot_compare(const CompareArgs& a, const LoadedLog& log, const CompareResult& r, const std::vector<std::string>& inputs,
+                  const std::vector<std::string>& outputs, const FrequencyCompareResult* fc, const std::string& how) {
+  const Experiment& e = log.data.experiments.front();
+  const Eigen::Index n = e.samples(), stride = plot_stride(n);
+  const Eigen::Index np = (n + stride - 1) / stride;
+  Eigen::VectorXd t(np);
+  for (Eigen::Index k = 0; k < np; ++k)
+    t(k) = log.time.size() == n ? log.time(k * stride) : static_cast<double>(k * stride) * log.data.Ts;
+  PlotFigure fig;
+  fig.title = a.model_path + " on " + a.log_path + " (" + how + (stride > 1 ? ", every " + std::to_string(stride) + "th sample drawn" : "") + ")";
+  for (Eigen::Index i = 0; i < std::min<Eigen::Index>(e.y.cols(), kMaxPlotOutputs); ++i) {
+    PlotPanel p;
+    p.title = outputs[static_cast<std::size_t>(i)] + ": fit " + fmt(r.fit_percent(i), 4) + " %";
+    p.xlabel = "time [s]";
+    p.ylabel = outputs[static_cast<std::size_t>(i)];
+    PlotCurve meas, sim;
+    meas.title = "measured";
+    sim.title = "model";
+    sim.dashed = true;
+    meas.x = sim.x = t;
+    meas.y.resize(np);
+    sim.y.resize(np);
+    for (Eigen::Index k = 0; k < np; ++k) {
+      meas.y(k) = e.y(k * stride, i);
+      sim.y(k) = r.y_hat(k * stride, i);
+    }
+    p.curves = {meas, sim};
+    fig.panels.push_back(std::move(p));
+  }
+  if (fc != nullptr) {
+    std::vector<BodeCurve> curves;
+    const FrfResult& h = fc->data_frf;
+    std::vector<Eigen::Index> in_band;
+    for (Eigen::Index k = 0; k < h.freq_hz.size(); ++k)
+      if (h.freq_hz(k) > 0.0 && h.freq_hz(k) >= fc->f_lo_hz && h.freq_hz(k) <= fc->f_hi_hz) in_band.push_back(k);
+    const auto nb = static_cast<Eigen::Index>(in_band.size());
+    int color = 0;
+    for (std::size_t q = 0; q < fc->pairs.size() && static_cast<Eigen::Index>(q) < kMaxPlotPairs; ++q, ++color) {
+      const auto& pr = fc->pairs[q];
+      BodeCurve data, model;
+      const std::string name = outputs[static_cast<std::size_t>(pr.output)] + " <- " + inputs[static_cast<std::size_t>(pr.input)];
+      data.title = name + " data (H1)";
+      model.title = name + " model";
+      data.color = model.color = color;
+      model.dashed = true;
+      data.f = model.f = Eigen::VectorXd(nb);
+      data.h = model.h = Eigen::VectorXcd(nb);
+      data.mag_lo = data.mag_hi = data.phase_halfwidth_deg = Eigen::VectorXd(nb);
+      for (Eigen::Index k = 0; k < nb; ++k) {
+        const auto b = static_cast<std::size_t>(in_band[static_cast<std::size_t>(k)]);
+        data.f(k) = h.freq_hz(in_band[static_cast<std::size_t>(k)]);
+        data.h(k) = h.H[b](pr.output, pr.input);
+        model.h(k) = fc->model_frf[b](pr.output, pr.input);
+        data.mag_lo(k) = h.magnitude_lower[b](pr.output, pr.input);
+        data.mag_hi(k) = h.magnitude_upper[b](pr.output, pr.input);
+        data.phase_halfwidth_deg(k) = h.phase_halfwidth_rad[b](pr.output, pr.input) * 180.0 / std::numbers::pi;
+      }
+      model.f = data.f;
+      curves.push_back(std::move(data));
+      curves.push_back(std::move(model));
+    }
+    for (PlotPanel& p : bode_panels(curves, "model vs data " + fmt(fc->f_lo_hz) + ".." + fmt(fc->f_hi_hz) + " Hz"))
+      fig.panels.push_back(std::move(p));
+  }
+  write_plot(fig, a.plot, "compare");
+}
 
 void run_compare(const CompareArgs& a) {
   const std::string verb = "compare";
+  if (!a.plot.empty()) refuse_to_overwrite_input(a.plot, {a.model_path, a.log_path});
+  std::optional<std::pair<double, double>> band;
+  if (!a.band.empty()) band = parse_range(a.band, "--band");
+  if (band && band->first < 0.0) throw CLI::ValidationError("--band", "need LO >= 0, found '" + a.band + "'");
   const ModelFile file = load_model(a.model_path);
   if (a.predict > 0 && file.K.size() == 0)
     throw DataError(a.model_path, 0, 0,
@@ -56,6 +139,25 @@ void run_compare(const CompareArgs& a) {
             << (a.x0 == "estimate" ? "estimated" : a.x0 == "model" ? "from the model file" : "zero") << ", "
             << log.data.total_samples() << " samples):\n"
             << format_fit_lines(r.fit_percent, outputs);
+
+  std::optional<FrequencyCompareResult> fc;
+  if (band) {
+    FrequencyCompareOptions fo;
+    fo.frf.welch.nfft = a.nfft;
+    fo.f_lo_hz = band->first;
+    fo.f_hi_hz = band->second;
+    fc = frequency_compare(model, log.data, fo);
+    std::cout << "in-band FRF error of the model against the data's H1 (" << fmt(fc->f_lo_hz) << ".." << fmt(fc->f_hi_hz)
+              << " Hz, " << fc->bins_in_band << " frequencies, nfft " << fc->data_frf.nfft
+              << "; relative, coherence-weighted; 0 = perfect):\n";
+    for (const auto& p : fc->pairs)
+      std::cout << "  " << outputs[static_cast<std::size_t>(p.output)] << " <- " << inputs[static_cast<std::size_t>(p.input)]
+                << ": " << fmt(p.relative_error, 3) << " (noise floor " << fmt(p.noise_floor, 2) << "), worst mismatch at "
+                << fmt(p.worst_freq_hz, 5) << " Hz (" << fmt(p.worst_mismatch, 3) << "), mean coherence "
+                << fmt(p.mean_coherence, 3) << "\n";
+    for (const auto& w : fc->warnings) warn(verb, w);
+  }
+  if (!a.plot.empty()) plot_compare(a, log, r, inputs, outputs, fc ? &*fc : nullptr, how);
 }
 
 }  // namespace
@@ -77,12 +179,24 @@ Verb register_compare(CLI::App& app) {
   cmd->add_option("--x0", args->x0, "initial state: estimate (least squares on this log), zero, model (stored x0)")
       ->capture_default_str()
       ->check(CLI::IsMember({"estimate", "zero", "model"}));
-  // --band LO:HI (frequency-domain fit, issue 3) goes here.
+  cmd->add_option("--band", args->band,
+                  "LO:HI in Hz: also compare the model's frequency response with the data's H1 estimate in this band")
+      ->check(range_validator());
+  cmd->add_option("--nfft", args->nfft, "segment length of the H1 estimate for --band")
+      ->capture_default_str()
+      ->check(CLI::Range(Eigen::Index{8}, Eigen::Index{1} << 26));
+  cmd->add_option("--plot", args->plot,
+                  "measured vs model output over time; with --band also the Bode overlay (.svg or .png; needs gnuplot)")
+      ->check(plot_path_validator());
   cmd->footer(
       "Fit % = 100 (1 - |y - y_hat| / |y - mean(y)|) per output; 100 is perfect, 0 is as good as the mean.\n"
+      "--band: per output-input pair, sqrt(sum g |G - H|^2 / sum g |H|^2) over the band's frequencies,\n"
+      "with G the model's response, H the data's H1 and g its coherence, and the frequency where\n"
+      "g |G - H| / |H| is largest. The noise floor is the value a perfect model would get.\n"
       "Example:\n"
       "  sysid compare model.json fresh.csv --inputs u --outputs y\n"
-      "  sysid compare model.json fresh.csv --predict 10");
+      "  sysid compare model.json fresh.csv --predict 10\n"
+      "  sysid compare model.json fresh.csv --band 0:100 --nfft 4096 --plot compare.svg");
   return {cmd, [args] { run_compare(*args); }};
 }
 

@@ -70,6 +70,7 @@ void plot_order_choice(const N4sidArgs& a, const N4sidResult& res) {
       if (logy) {  // impulses on a log axis start at the bottom: draw a point instead
         mark.style = "points";
         mark.point_type = 6;
+        mark.point_size = 2.5;
       }
       p.curves.push_back(std::move(mark));
     }
@@ -109,10 +110,6 @@ std::string parse_order(const std::string& text, OrderSpec& spec) {
   if (!parse_int(text.substr(0, colon), spec.lo) || !parse_int(text.substr(colon + 1), spec.hi) || spec.lo > spec.hi)
     return "expected A:B with 1 <= A <= B, found '" + text + "'";
   return {};
-}
-
-std::string percent_label(double fraction) {
-  return "last " + fmt(100.0 * (1.0 - fraction), 3) + "% of samples";
 }
 
 /// Channel names for the report: the log's column names.
@@ -170,38 +167,19 @@ void run_n4sid(const N4sidArgs& a) {
 
   const LogOptions log_options =
       make_log_options(a.log, split_names(a.log.inputs, "--inputs"), split_names(a.log.outputs, "--outputs"));
-  IoData all = load_log(a.log_path, log_options).data;
-  // Kept apart from the samples, which are moved into n4sid (peak memory: one copy of the log).
-  const std::vector<std::string> names = output_names(all), all_input_names = all.input_names,
-                                 all_output_names = all.output_names;
-  const double log_ts = all.Ts;
-
   // Estimation and validation data.
-  IoData estimation;
-  std::optional<IoData> validation;
-  std::string validation_label;
   std::optional<double> split_fraction = a.split;
   if (order.sweep && !split_fraction && a.validate.empty()) {
     split_fraction = 0.7;
     note(verb, "--order A:B compares orders on validation data; none given, so using --split 0.7");
   }
-  if (split_fraction) {
-    DataSplit parts = split(all, *split_fraction);
-    all = IoData();  // free the samples: both parts hold copies
-    estimation = std::move(parts.estimation);
-    validation = std::move(parts.validation);
-    validation_label = percent_label(*split_fraction);
-  } else {
-    estimation = std::move(all);
-    if (!a.validate.empty()) {
-      IoData v = load_log(a.validate, log_options).data;
-      if (std::abs(v.Ts - log_ts) > 1e-6 * log_ts)
-        throw DataError(a.validate, 0, 0,
-                        "sample time " + fmt(v.Ts, 9) + " s differs from the estimation log's " + fmt(log_ts, 9) + " s");
-      validation = std::move(v);
-      validation_label = a.validate;
-    }
-  }
+  EstimationData loaded = load_estimation_data(a.log_path, a.validate, split_fraction, log_options);
+  IoData& estimation = loaded.estimation;
+  std::optional<IoData>& validation = loaded.validation;
+  const std::string& validation_label = loaded.validation_label;
+  // Kept apart from the samples, which are moved into n4sid (peak memory: one copy of the log).
+  const std::vector<std::string> names = output_names(estimation), all_input_names = estimation.input_names,
+                                 all_output_names = estimation.output_names;
 
   N4sidOptions options;
   options.weighting = a.method == "moesp" ? SubspaceWeighting::moesp
@@ -373,21 +351,7 @@ Verb register_n4sid(CLI::App& app) {
   cmd->add_option("--hankel", args->hankel, "Hankel compression route: auto, qr (most accurate) or cholesky (fastest)")
       ->capture_default_str()
       ->check(CLI::IsMember({"auto", "qr", "cholesky"}));
-  CLI::Option* val = cmd->add_option("--validate", args->validate,
-                                     "validation log (same columns): identify on LOG, report the fit on FILE");
-  CLI::Option* spl = cmd->add_option("--split", args->split,
-                                     "identify on the first fraction F of LOG, validate on the rest (0 < F < 1)")
-                         ->check(CLI::Validator(
-                             [](std::string& s) -> std::string {
-                               try {
-                                 const double f = std::stod(s);
-                                 if (f > 0.0 && f < 1.0) return {};
-                               } catch (const std::exception&) {
-                               }
-                               return "expected a fraction 0 < F < 1, found '" + s + "'";
-                             },
-                             "F"));
-  val->excludes(spl);
+  add_validation_options(*cmd, args->validate, args->split);
   cmd->add_option("--band-limit", args->band_limit_hz,
                   "HZ: low-pass inputs and outputs (Butterworth) before identification and put the filter in series "
                   "with the model, so its gain above the excited band is not arbitrary (Par2 paper remedy)")

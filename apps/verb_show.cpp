@@ -1,13 +1,19 @@
 // sysid show: human-readable summary of a model file.
 #include <sysid/core/modal_table.hpp>
 #include <sysid/core/poles_zeros.hpp>
+#include <sysid/core/frequency_response.hpp>
 #include <sysid/core/transfer_function.hpp>
+#include <sysid/io/atomic_file.hpp>
 
+#include <cmath>
 #include <iostream>
+#include <limits>
 #include <memory>
+#include <numbers>
 #include <sstream>
 
 #include "cli_common.hpp"
+#include "plot.hpp"
 #include "verbs.hpp"
 
 namespace sysid::cli {
@@ -22,7 +28,86 @@ constexpr std::size_t kMaxListItems = 8;
 struct ShowArgs {
   std::string model_path;
   int digits = 4;
+  std::string plot;
 };
+
+/// Bode plot of the model (the first kMaxPairs input-output pairs)
+/// and its pole-zero map.
+void plot_model(const ShowArgs& a, const StateSpace& sys, const Eigen::VectorXcd& p) {
+  constexpr Eigen::Index kMaxPairs = 8;
+  // Frequency grid: discrete, 1e-3 of Nyquist up to Nyquist; continuous, a decade
+  // either side of the poles' natural frequencies.
+  double f_lo = 0.0, f_hi = 0.0;
+  if (sys.is_discrete()) {
+    f_hi = 0.5 / sys.Ts;
+    f_lo = 1e-3 * f_hi;
+  } else {
+    double wmin = std::numeric_limits<double>::infinity(), wmax = 0.0;
+    for (Eigen::Index i = 0; i < p.size(); ++i)
+      if (std::abs(p[i]) > 0.0) {
+        wmin = std::min(wmin, std::abs(p[i]));
+        wmax = std::max(wmax, std::abs(p[i]));
+      }
+    if (!(wmax > 0.0)) wmin = wmax = 2.0 * std::numbers::pi;
+    f_lo = 0.1 * wmin / (2.0 * std::numbers::pi);
+    f_hi = 10.0 * wmax / (2.0 * std::numbers::pi);
+  }
+  const Eigen::Index nf = 800;
+  Eigen::VectorXd f(nf);
+  for (Eigen::Index k = 0; k < nf; ++k)
+    f(k) = f_lo * std::pow(f_hi / f_lo, static_cast<double>(k) / static_cast<double>(nf - 1));
+  const std::vector<Eigen::MatrixXcd> g = frequency_response(sys, f);
+  std::vector<BodeCurve> curves;
+  for (Eigen::Index i = 0; i < sys.outputs(); ++i)
+    for (Eigen::Index j = 0; j < sys.inputs(); ++j) {
+      if (static_cast<Eigen::Index>(curves.size()) == kMaxPairs) continue;
+      BodeCurve b;
+      b.title = sys.output_name(i) + " <- " + sys.input_name(j);
+      b.f = f;
+      b.h.resize(nf);
+      for (Eigen::Index k = 0; k < nf; ++k) b.h(k) = g[static_cast<std::size_t>(k)](i, j);
+      curves.push_back(std::move(b));
+    }
+  PlotFigure fig;
+  fig.title = a.model_path + " (order " + std::to_string(sys.order()) + ")";
+  fig.panels = bode_panels(curves, "");
+  PlotPanel pz;
+  pz.title = sys.is_discrete() ? "poles (x) and transmission zeros (o), z-plane" : "poles (x) and transmission zeros (o), s-plane";
+  pz.xlabel = "real";
+  pz.ylabel = "imaginary";
+  pz.square = true;
+  pz.unit_circle = sys.is_discrete();
+  PlotCurve pc, zc;
+  pc.title = "poles";
+  pc.style = zc.style = "points";
+  pc.point_type = 2;
+  zc.point_type = 6;
+  pc.x = p.real();
+  pc.y = p.imag();
+  Eigen::VectorXcd z;
+  try {
+    z = transmission_zeros(sys);
+  } catch (const std::exception&) {
+    z.resize(0);  // a failed zero computation leaves the map with poles only
+  }
+  zc.title = "zeros";
+  zc.x = z.real();
+  zc.y = z.imag();
+  zc.color = 1;
+  pz.curves.push_back(std::move(pc));
+  if (z.size() > 0) pz.curves.push_back(std::move(zc));
+  if (sys.is_discrete()) {
+    double r = 1.1;
+    for (Eigen::Index i = 0; i < z.size(); ++i)
+      if (std::isfinite(std::abs(z[i]))) r = std::max(r, 1.1 * std::abs(z[i]));
+    for (Eigen::Index i = 0; i < p.size(); ++i) r = std::max(r, 1.1 * std::abs(p[i]));
+    r = std::min(r, 5.0);  // far zeros are clipped rather than shrinking the unit circle to a dot
+    pz.xrange = pz.yrange = std::make_pair(-r, r);
+  }
+  fig.panels.push_back(std::move(pz));
+  fig.height_per_row = 300;
+  write_plot(fig, a.plot, "show");
+}
 
 std::string format_complex(std::complex<double> z, int digits) {
   if (z.imag() == 0.0) return fmt(z.real(), digits);
@@ -49,6 +134,7 @@ std::string format_json_value(const nlohmann::json& v, int digits) {
 }
 
 void run_show(const ShowArgs& a) {
+  if (!a.plot.empty()) refuse_to_overwrite_input(a.plot, {a.model_path});
   const ModelFile file = load_model(a.model_path, /*allow_augmented=*/true);
   const StateSpace& sys = file.model;
   const int d = a.digits;
@@ -102,6 +188,7 @@ void run_show(const ShowArgs& a) {
       out << "  " << it.key() << ": " << format_json_value(it.value(), d) << "\n";
   }
   std::cout << out.str();
+  if (!a.plot.empty()) plot_model(a, sys, p);
 }
 
 }  // namespace
@@ -114,9 +201,12 @@ Verb register_show(CLI::App& app) {
   cmd->add_option("--digits", args->digits, "significant digits of poles and transfer-function coefficients")
       ->capture_default_str()
       ->check(CLI::Range(1, 17));
+  cmd->add_option("--plot", args->plot, "Bode plot of the model and its pole-zero map (.svg or .png; needs gnuplot)")
+      ->check(plot_path_validator());
   cmd->footer(
       "Example:\n"
-      "  sysid show model.json --digits 6");
+      "  sysid show model.json --digits 6\n"
+      "  sysid show model.json --plot model.svg");
   return {cmd, [args] { run_show(*args); }};
 }
 

@@ -19,5 +19,14 @@ Verb register_simulate(CLI::App& app);
 Verb register_compare(CLI::App& app);
 Verb register_show(CLI::App& app);
 Verb register_excite(CLI::App& app);
+Verb register_frf(CLI::App& app);
+Verb register_psd(CLI::App& app);
+Verb register_filter(CLI::App& app);
+Verb register_resid(CLI::App& app);
+Verb register_arx(CLI::App& app);
+Verb register_ar(CLI::App& app);
+Verb register_armax(CLI::App& app);
+Verb register_arma(CLI::App& app);
+Verb register_oe(CLI::App& app);
 
 }  // namespace sysid::cli

@@ -13,6 +13,7 @@
 #include <sysid/core/streaming_qr.hpp>
 #include <sysid/hankel/block_hankel.hpp>
 #include <sysid/signal/butterworth.hpp>
+#include <sysid/signal/resample.hpp>
 #include <sysid/signal/sos_filter.hpp>
 #include <sysid/spectral/welch.hpp>
 #include <sysid/subspace/innovation_model.hpp>
@@ -343,29 +344,6 @@ inline int decimation_factor(double fs, double f_high, int requested) {
   return r >= 3 ? r : 1;
 }
 
-/// Zero-phase low-pass (8th-order Butterworth at 0.8 x the new Nyquist
-/// frequency) of inputs and outputs alike, which leaves the input-output
-/// relation unchanged, then every r-th sample.
-inline IoData decimate(const IoData& data, int r) {
-  IoData out;
-  out.Ts = data.Ts * r;
-  out.input_names = data.input_names;
-  out.output_names = data.output_names;
-  const double fs = 1.0 / data.Ts;
-  const SecondOrderSections lp = butterworth(8, BandType::lowpass, 0.8 * fs / (2.0 * r), 0.0, fs);
-  for (const auto& e : data.experiments) {
-    const Eigen::MatrixXd uf = filtfilt(lp, e.u), yf = filtfilt(lp, e.y);
-    const Eigen::Index n = (e.samples() + r - 1) / r;
-    Experiment d{Eigen::MatrixXd(n, e.u.cols()), Eigen::MatrixXd(n, e.y.cols()), e.source};
-    for (Eigen::Index k = 0; k < n; ++k) {
-      d.u.row(k) = uf.row(k * r);
-      d.y.row(k) = yf.row(k * r);
-    }
-    out.experiments.push_back(std::move(d));
-  }
-  return out;
-}
-
 /// Principal real r-th root of A (r odd): the discrete poles at the original
 /// rate, z = z_d^(1/r) for complex poles (same continuous-time s = log(z)/Ts),
 /// the real root for real poles. Via the eigendecomposition; NumericalError if
@@ -458,7 +436,9 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
     return c;
   };
   if (res.decimation > 1) {
-    core = identify(detail::decimate(data, res.decimation));
+    // Zero-phase 8th-order Butterworth at 0.8 x the new Nyquist frequency on
+    // inputs and outputs alike (their relation is unchanged), then every r-th sample.
+    core = identify(decimate(data, res.decimation));
     core.A = detail::principal_root(core.A, res.decimation);
     res.warnings.push_back("n4sid: the inputs excite only 0.." + std::to_string(band_hi) + " Hz of " + std::to_string(nyquist) +
                            " Hz: identified on a grid decimated by " + std::to_string(res.decimation) +

@@ -295,17 +295,32 @@ TEST(IoModelJson, InvalidJsonGivesLineAndColumn) {
 }
 
 TEST(IoModelJson, DimensionMismatchCaughtByValidateNamesFile) {
-  // No inputs at all: each matrix has a consistent shape but the model is invalid.
+  // No outputs at all: each matrix has a consistent shape but the model is invalid.
   try {
     json j = json::parse(k_minimal);
-    j["B"] = json::parse("[[], []]");
-    j["D"] = json::parse("[[]]");
+    j["C"] = json::parse("[]");
+    j["D"] = json::parse("[]");
     sysid::model_from_json_string(j.dump(), "m.json");
     FAIL();
   } catch (const DataError& e) {
     EXPECT_EQ(e.file(), "m.json");
-    EXPECT_NE(e.message().find("need at least one input"), std::string::npos) << e.what();
+    EXPECT_NE(e.message().find("output"), std::string::npos) << e.what();
   }
+}
+
+TEST(IoModelJson, TimeSeriesModelWithoutInputsRoundTrips) {
+  // AR/ARMA models have no inputs: B is n x 0 and D is l x 0.
+  json j = json::parse(k_minimal);
+  j["B"] = json::parse("[[], []]");
+  j["D"] = json::parse("[[]]");
+  j["K"] = json::parse("[[0.2], [0.1]]");
+  const sysid::ModelFile file = sysid::model_from_json_string(j.dump(), "m.json");
+  EXPECT_EQ(file.model.inputs(), 0);
+  EXPECT_EQ(file.model.outputs(), 1);
+  const sysid::ModelFile again = sysid::model_from_json_string(sysid::model_to_json_string(file), "again.json");
+  EXPECT_EQ(again.model.inputs(), 0);
+  EXPECT_EQ(again.K, file.K);
+  EXPECT_EQ(again.model.A, file.model.A);
 }
 
 TEST(IoModelJson, FileErrors) {

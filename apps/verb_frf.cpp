@@ -1,0 +1,179 @@
+// sysid frf: non-parametric frequency response (H1/H2) with coherence and
+// confidence bounds, written as the DESIGN.md frequency-response CSV.
+#include <sysid/io/atomic_file.hpp>
+#include <sysid/io/csv.hpp>
+#include <sysid/spectral/frf.hpp>
+
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <numbers>
+
+#include "cli_common.hpp"
+#include "plot.hpp"
+#include "verbs.hpp"
+
+namespace sysid::cli {
+
+namespace {
+
+/// Pairs drawn in one plot at most (an 8 x 8 FRF has 64; the CSV has them all).
+constexpr Eigen::Index kMaxPlotPairs = 8;
+
+struct FrfArgs {
+  std::string log_path;
+  LogArgs log;
+  Eigen::Index nfft = 1024;
+  double overlap = 0.5;
+  std::string window = "hann";
+  std::string detrend = "mean";
+  std::string estimator = "h1";
+  double confidence = 0.95;
+  std::string out, plot;
+};
+
+double db(double a) { return 20.0 * std::log10(a); }  // 0 -> -inf, inf -> inf: written as such
+
+void run_frf(const FrfArgs& a) {
+  const std::string verb = "frf";
+  if (a.out.empty() && a.plot.empty()) throw CLI::ValidationError("--out/--plot", "give --out FILE.csv and/or --plot FILE.svg");
+  if (!a.out.empty()) refuse_to_overwrite_input(a.out, {a.log_path});
+  if (!a.plot.empty()) refuse_to_overwrite_input(a.plot, {a.log_path});
+  const std::vector<std::string> inputs = split_names(a.log.inputs, "--inputs");
+  const std::vector<std::string> outputs = split_names(a.log.outputs, "--outputs");
+  const LoadedLog log = load_log(a.log_path, make_log_options(a.log, inputs, outputs));
+
+  FrfOptions o;
+  o.welch.nfft = a.nfft;
+  o.welch.overlap = a.overlap;
+  o.welch.window = parse_window(a.window);
+  o.welch.detrend = a.detrend == "none" ? Detrend::none : a.detrend == "linear" ? Detrend::linear : Detrend::mean;
+  o.estimator = a.estimator == "h2" ? FrfEstimator::h2 : FrfEstimator::h1;
+  o.confidence = a.confidence;
+  const FrfResult r = frf(log.data, o);
+  if (r.nfft != a.nfft)
+    note(verb, "--nfft " + std::to_string(a.nfft) + " is longer than the log (" + std::to_string(log.data.total_samples()) +
+                   " samples): using " + std::to_string(r.nfft));
+  std::cout << r.brief_report() << "\n";
+  for (const auto& w : r.warnings) warn(verb, w);
+
+  const Eigen::Index l = r.outputs(), m = r.inputs(), nf = r.freq_hz.size();
+  const double to_deg = 180.0 / std::numbers::pi;
+  if (!a.out.empty()) {
+    // DESIGN.md "Frequency-response files": f_hz, then per output-input pair
+    // re, im, mag_db, phase_deg, coh; then the confidence bounds of the pair.
+    std::vector<std::string> names{"f_hz"};
+    for (Eigen::Index i = 0; i < l; ++i)
+      for (Eigen::Index j = 0; j < m; ++j) {
+        const std::string s = "_" + outputs[static_cast<std::size_t>(i)] + "_" + inputs[static_cast<std::size_t>(j)];
+        for (const char* p : {"re", "im", "mag_db", "phase_deg", "coh", "mag_db_lo", "mag_db_hi", "phase_deg_lo", "phase_deg_hi"})
+          names.push_back(p + s);
+      }
+    constexpr Eigen::Index kPerPair = 9;
+    Eigen::MatrixXd table(nf, 1 + kPerPair * l * m);
+    for (Eigen::Index k = 0; k < nf; ++k) {
+      const auto b = static_cast<std::size_t>(k);
+      table(k, 0) = r.freq_hz(k);
+      Eigen::Index c = 1;
+      for (Eigen::Index i = 0; i < l; ++i)
+        for (Eigen::Index j = 0; j < m; ++j) {
+          const std::complex<double> h = r.H[b](i, j);
+          const double phase = std::arg(h) * to_deg, hw = r.phase_halfwidth_rad[b](i, j) * to_deg;
+          table.row(k).segment(c, kPerPair) << h.real(), h.imag(), db(std::abs(h)), phase, r.coherence[b](i, j),
+              db(r.magnitude_lower[b](i, j)), db(r.magnitude_upper[b](i, j)), phase - hw, phase + hw;
+          c += kPerPair;
+        }
+    }
+    write_csv(a.out, names, table);
+    note(verb, "wrote " + std::to_string(nf) + " frequencies x " + std::to_string(l * m) + " pair(s) to " + a.out);
+  }
+
+  if (!a.plot.empty()) {
+    std::vector<BodeCurve> curves;
+    PlotPanel coh;
+    coh.title = "coherence";
+    coh.xlabel = "frequency [Hz]";
+    coh.ylabel = "gamma^2";
+    coh.logx = true;
+    coh.yrange = std::make_pair(0.0, 1.05);
+    Eigen::Index drawn = 0;
+    for (Eigen::Index i = 0; i < l && drawn < kMaxPlotPairs; ++i)
+      for (Eigen::Index j = 0; j < m && drawn < kMaxPlotPairs; ++j, ++drawn) {
+        BodeCurve b;
+        b.title = outputs[static_cast<std::size_t>(i)] + " <- " + inputs[static_cast<std::size_t>(j)];
+        b.f = r.freq_hz;
+        b.h.resize(nf);
+        b.mag_lo.resize(nf);
+        b.mag_hi.resize(nf);
+        b.phase_halfwidth_deg.resize(nf);
+        PlotCurve c;
+        c.title = b.title;
+        c.x.resize(nf - 1);
+        c.y.resize(nf - 1);
+        for (Eigen::Index k = 0; k < nf; ++k) {
+          const auto bk = static_cast<std::size_t>(k);
+          b.h(k) = r.H[bk](i, j);
+          b.mag_lo(k) = r.magnitude_lower[bk](i, j);
+          b.mag_hi(k) = r.magnitude_upper[bk](i, j);
+          b.phase_halfwidth_deg(k) = r.phase_halfwidth_rad[bk](i, j) * to_deg;
+          if (k > 0) {
+            c.x(k - 1) = r.freq_hz(k);
+            c.y(k - 1) = r.coherence[bk](i, j);
+          }
+        }
+        curves.push_back(std::move(b));
+        coh.curves.push_back(std::move(c));
+      }
+    if (l * m > kMaxPlotPairs)
+      note(verb, "the plot shows the first " + std::to_string(kMaxPlotPairs) + " of " + std::to_string(l * m) +
+                     " pairs (the CSV has all)");
+    PlotFigure fig;
+    fig.title = std::string(r.estimator == FrfEstimator::h1 ? "H1" : "H2") + " estimate of " + a.log_path + " (" +
+                fmt(100.0 * r.confidence, 3) + " % confidence band, nfft " + std::to_string(r.nfft) + ")";
+    fig.panels = bode_panels(curves, "");
+    fig.panels.push_back(std::move(coh));
+    write_plot(fig, a.plot, verb);
+  }
+}
+
+}  // namespace
+
+Verb register_frf(CLI::App& app) {
+  auto args = std::make_shared<FrfArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "frf", "Non-parametric frequency response (H1/H2) with coherence and confidence bounds, as CSV (and a Bode plot)");
+  cmd->add_option("log", args->log_path, "CSV log with the input and output columns")->required();
+  add_log_options(*cmd, args->log, {});
+  cmd->add_option("--nfft", args->nfft, "segment (FFT) length; halved until it fits the log")
+      ->capture_default_str()
+      ->check(CLI::Range(Eigen::Index{8}, Eigen::Index{1} << 26));
+  cmd->add_option("--overlap", args->overlap, "fraction of a segment shared with the next, 0 <= overlap < 1")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 0.99));
+  cmd->add_option("--window", args->window, "segment taper")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"hann", "hamming", "rectangular", "blackman-harris", "flattop"}));
+  cmd->add_option("--detrend", args->detrend, "removed from every segment before the window")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"none", "mean", "linear"}));
+  cmd->add_option("--estimator", args->estimator, "h1 (noise on the outputs) or h2 (noise on the inputs)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"h1", "h2"}));
+  cmd->add_option("--confidence", args->confidence, "level of the magnitude and phase bounds, 0 < level < 1")
+      ->capture_default_str()
+      ->check(CLI::Range(0.5, 0.9999));
+  cmd->add_option("--out", args->out, "frequency-response CSV file (one row per frequency)");
+  cmd->add_option("--plot", args->plot, "Bode magnitude and phase with the confidence band, and coherence (.svg or .png; needs gnuplot)")
+      ->check(plot_path_validator());
+  cmd->footer(
+      "Columns: f_hz, then for each output y and input u: re_<y>_<u>, im_<y>_<u>, mag_db_<y>_<u>,\n"
+      "phase_deg_<y>_<u> (wrapped to +-180), coh_<y>_<u> (ordinary coherence), and the confidence\n"
+      "bounds mag_db_lo_<y>_<u>, mag_db_hi_<y>_<u>, phase_deg_lo_<y>_<u>, phase_deg_hi_<y>_<u>\n"
+      "(Bendat & Piersol random error; -inf/inf where no bound can be given).\n"
+      "With several inputs all must be excited independently in the log (H = G_yu G_uu^-1).\n"
+      "Example:\n"
+      "  sysid frf par2_gu.csv --inputs u --outputs y --nfft 4096 --out frf.csv --plot frf.svg");
+  return {cmd, [args] { run_frf(*args); }};
+}
+
+}  // namespace sysid::cli

@@ -1,0 +1,258 @@
+// sysid arx | ar | armax | arma | oe: polynomial (prediction-error) models from a
+// CSV log, one model per output over all inputs ("stacked MISO"), written as a
+// "polynomial" model file with its innovation-form state space.
+#include <sysid/config.hpp>
+#include <sysid/core/modal_table.hpp>
+#include <sysid/io/atomic_file.hpp>
+#include <sysid/io/polynomial_model_file.hpp>
+#include <sysid/pem/arx.hpp>
+#include <sysid/pem/prediction_error.hpp>
+#include <sysid/validate/compare.hpp>
+
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+
+#include "cli_common.hpp"
+#include "verbs.hpp"
+
+namespace sysid::cli {
+
+namespace {
+
+enum class Structure { arx, ar, armax, arma, oe };
+
+const char* name_of(Structure s) {
+  switch (s) {
+    case Structure::arx: return "arx";
+    case Structure::ar: return "ar";
+    case Structure::armax: return "armax";
+    case Structure::arma: return "arma";
+    case Structure::oe: return "oe";
+  }
+  return "?";
+}
+
+bool has_inputs(Structure s) { return s == Structure::arx || s == Structure::armax || s == Structure::oe; }
+
+struct PolynomialArgs {
+  std::string log_path;
+  LogArgs log;
+  int na = 0, nc = 0;
+  std::string nb = "1", nf = "1", nk = "1";
+  std::string ar_method = "ls";
+  int max_iterations = PemOptions{}.max_iterations;
+  bool write_unconverged = false;
+  std::string validate;
+  std::optional<double> split;
+  std::string out;
+};
+
+/// "4" (every input) or "4,2,..." (one per input) -> one order per input, each >= minimum.
+/// Bad orders are bad input (exit 2, std::invalid_argument), as the library reports them.
+std::vector<int> per_input_orders(const std::string& text, Eigen::Index inputs, const std::string& option, int minimum) {
+  std::vector<int> values;
+  for (const std::string& item : split_names(text, option)) {
+    if (item.empty() || item.size() > 6 || item.find_first_not_of("-0123456789") != std::string::npos)
+      throw std::invalid_argument(option + ": expected an integer or a comma-separated list of integers, found '" + item + "'");
+    const int v = std::stoi(item);
+    if (v < minimum)
+      throw std::invalid_argument(option + ": expected values >= " + std::to_string(minimum) + ", found " + std::to_string(v) +
+                                  (option == "--nk" ? " (a negative delay would make the model non-causal)" : ""));
+    values.push_back(v);
+  }
+  if (values.size() == 1) return std::vector<int>(static_cast<std::size_t>(inputs), values.front());
+  if (static_cast<Eigen::Index>(values.size()) != inputs)
+    throw std::invalid_argument(option + ": expected one value or one per input (" + std::to_string(inputs) + "), found " +
+                                std::to_string(values.size()));
+  return values;
+}
+
+std::string format_polynomial(const Eigen::VectorXd& p) {
+  std::ostringstream s;
+  s << "[";
+  for (Eigen::Index k = 0; k < p.size(); ++k) s << (k ? ", " : "") << fmt(p(k), 6);
+  s << "]";
+  return s.str();
+}
+
+void run_polynomial(Structure structure, const PolynomialArgs& a) {
+  const std::string verb = name_of(structure);
+  std::vector<std::string> inputs_files{a.log_path};
+  if (!a.validate.empty()) inputs_files.push_back(a.validate);
+  if (!a.out.empty()) refuse_to_overwrite_input(a.out, inputs_files);
+  const LogOptions log_options = make_log_options(
+      a.log, has_inputs(structure) ? split_names(a.log.inputs, "--inputs") : std::vector<std::string>{},
+      split_names(a.log.outputs, "--outputs"));
+  EstimationData data = load_estimation_data(a.log_path, a.validate, a.split, log_options);
+  const IoData& est = data.estimation;
+  const Eigen::Index m = est.inputs(), l = est.outputs();
+
+  std::vector<PolynomialModel> models;
+  Eigen::VectorXd input_offset = Eigen::VectorXd::Zero(m), output_offset = Eigen::VectorXd::Zero(l);
+  std::ostringstream report;
+  std::vector<std::string> warnings;
+  bool converged = true;
+  std::string structure_label = verb;
+  if (structure == Structure::arx || structure == Structure::ar) {
+    LinearPolynomialResult r;
+    if (structure == Structure::arx) {
+      ArxOptions o;
+      o.na = a.na;
+      o.nb = per_input_orders(a.nb, m, "--nb", 0);
+      o.nk = per_input_orders(a.nk, m, "--nk", 0);
+      r = arx(est, o);
+    } else {
+      ArOptions o;
+      o.na = a.na;
+      o.method = a.ar_method == "burg" ? ArMethod::burg : a.ar_method == "yw" ? ArMethod::yule_walker : ArMethod::least_squares;
+      r = ar(est, o);
+    }
+    models = r.models;
+    if (m > 0) input_offset = r.input_offset;
+    output_offset = r.output_offset;
+    warnings = r.warnings;
+    report << verb << ": linear least squares" << (structure == Structure::ar ? " (" + a.ar_method + ")" : std::string()) << "\n";
+  } else {
+    PemOptions o;
+    o.na = structure == Structure::oe ? 0 : a.na;
+    o.nc = structure == Structure::oe ? 0 : a.nc;
+    o.nb = has_inputs(structure) ? per_input_orders(a.nb, m, "--nb", 0) : std::vector<int>{};
+    o.nk = has_inputs(structure) ? per_input_orders(a.nk, m, "--nk", 0) : std::vector<int>{};
+    if (structure == Structure::oe) o.nf = per_input_orders(a.nf, m, "--nf", 0);
+    o.max_iterations = a.max_iterations;
+    for (Eigen::Index r = 0; r < l; ++r) {
+      o.output = r;
+      const PemResult res = pem(est, o);
+      models.push_back(res.model);
+      if (m > 0) input_offset = res.input_offset;
+      output_offset(r) = res.output_offset(r);
+      structure_label = res.structure;
+      report << verb << " output '" << est.output_name(r) << "': " << res.iterations << " iterations, "
+             << (res.status == PemResult::Status::converged ? "converged" : "NOT converged") << " (" << res.termination
+             << "), cost " << fmt(res.initial_cost, 5) << " -> " << fmt(res.final_cost, 5) << ", condition "
+             << fmt(res.condition, 3) << "\n";
+      if (res.status != PemResult::Status::converged) converged = false;
+      warnings.insert(warnings.end(), res.warnings.begin(), res.warnings.end());
+    }
+  }
+
+  ModelFile file = polynomial_model_file(models, structure_label, est.input_names, est.output_names);
+  file.input_offset = input_offset;
+  file.output_offset = output_offset;
+  for (Eigen::Index r = 0; r < l; ++r) {
+    const PolynomialModel& pm = models[static_cast<std::size_t>(r)];
+    report << "output '" << est.output_name(r) << "': noise variance " << fmt(pm.noise_variance, 5) << "\n  A = "
+           << format_polynomial(pm.A) << "\n";
+    for (Eigen::Index i = 0; i < pm.inputs(); ++i)
+      report << "  B(" << est.input_name(i) << ") = " << format_polynomial(pm.B[static_cast<std::size_t>(i)]) << " (nk "
+             << pm.nk[static_cast<std::size_t>(i)] << ")"
+             << (pm.nf(i) > 0 ? ", F = " + format_polynomial(pm.F[static_cast<std::size_t>(i)]) : std::string()) << "\n";
+    if (pm.nc() > 0) report << "  C = " << format_polynomial(pm.C) << "\n";
+  }
+  CompareOptions co;
+  co.input_offset = input_offset;
+  co.output_offset = output_offset;
+  const std::vector<std::string> names = model_output_names(file);
+  if (m > 0) {
+    report << "fit on estimation data [%] (simulation, x0 estimated):\n" << format_fit_lines(compare_fit(file.model, file.K, est, co), names);
+    if (data.validation)
+      report << "fit on validation data [%] (simulation, x0 estimated, " << data.validation_label << "):\n"
+             << format_fit_lines(compare_fit(file.model, file.K, *data.validation, co), names);
+  }
+  {
+    CompareOptions one_step = co;
+    one_step.predict_steps = 1;
+    const IoData& target = data.validation ? *data.validation : est;
+    report << "one-step prediction fit [%] on " << (data.validation ? "validation" : "estimation") << " data:\n"
+           << format_fit_lines(compare_fit(file.model, file.K, target, one_step), names);
+  }
+  report << "modes:\n" << format_modal_table(modal_table(file.model));
+  std::cout << report.str() << std::flush;
+  for (const auto& w : warnings) warn(verb, w);
+
+  if (!converged && !a.write_unconverged)
+    throw NumericalError(verb + ": the prediction-error minimisation did not converge (see above); no model written "
+                                "(--write-unconverged writes it anyway)");
+  if (!a.out.empty()) {
+    nlohmann::json& p = file.provenance;
+    p["method"] = verb;
+    p["data"] = a.log_path;
+    p["na"] = a.na;
+    if (has_inputs(structure)) {
+      p["nb"] = a.nb;
+      p["nk"] = a.nk;
+    }
+    if (structure == Structure::armax || structure == Structure::arma) p["nc"] = a.nc;
+    if (structure == Structure::oe) p["nf"] = a.nf;
+    if (data.validation) p["validation"] = data.validation_label;
+    p["converged"] = converged;
+    p["sysid_version"] = SYSID_VERSION_STRING;
+    write_model_json(a.out, file);
+    note(verb, "wrote " + a.out);
+  }
+  if (!converged) throw NumericalError(verb + ": the prediction-error minimisation did not converge; model written as asked");
+}
+
+Verb register_structure(CLI::App& app, Structure structure, const std::string& description, const std::string& example) {
+  auto args = std::make_shared<PolynomialArgs>();
+  const std::string verb = name_of(structure);
+  CLI::App* cmd = app.add_subcommand(verb, description);
+  cmd->add_option("log", args->log_path, "CSV log with the input and output columns")->required();
+  LogOptionSpec spec;
+  spec.inputs_required = has_inputs(structure);
+  add_log_options(*cmd, args->log, spec);
+  if (structure != Structure::oe)
+    cmd->add_option("--na", args->na, "order of A (poles)")->required()->check(CLI::Range(structure == Structure::arx ? 0 : 1, 10000));
+  if (has_inputs(structure)) {
+    cmd->add_option("--nb", args->nb, "coefficients of B per input (one number for every input, or a comma-separated list)")
+        ->required();
+    cmd->add_option("--nk", args->nk, "input delay in samples (one number, or one per input)")->capture_default_str();
+  }
+  if (structure == Structure::armax || structure == Structure::arma)
+    cmd->add_option("--nc", args->nc, "order of C (noise zeros)")->required()->check(CLI::Range(1, 10000));
+  if (structure == Structure::oe)
+    cmd->add_option("--nf", args->nf, "order of F per input (one number, or one per input)")->required();
+  if (structure == Structure::ar)
+    cmd->add_option("--method", args->ar_method, "ls (least squares), burg, or yw (Yule-Walker)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"ls", "burg", "yw"}));
+  if (structure == Structure::armax || structure == Structure::arma || structure == Structure::oe) {
+    cmd->add_option("--max-iterations", args->max_iterations, "Gauss-Newton / Levenberg-Marquardt iterations at most")
+        ->capture_default_str()
+        ->check(CLI::Range(0, 100000));
+    cmd->add_flag("--write-unconverged", args->write_unconverged,
+                  "write the model even when the minimisation did not converge (the exit code is still 3)");
+  }
+  add_validation_options(*cmd, args->validate, args->split);
+  cmd->add_option("--out", args->out, "model file to write (JSON, type polynomial, with its state space)");
+  cmd->footer("Prints the polynomials, the fit on estimation and validation data and the modes.\nExample:\n  " + example);
+  return {cmd, [args, structure] { run_polynomial(structure, *args); }};
+}
+
+}  // namespace
+
+Verb register_arx(CLI::App& app) {
+  return register_structure(app, Structure::arx, "ARX model A y = B u + e by least squares (one per output)",
+                            "sysid arx log.csv --inputs u --outputs y --na 4 --nb 4 --nk 1 --split 0.7 --out arx.json");
+}
+Verb register_ar(CLI::App& app) {
+  return register_structure(app, Structure::ar, "AR time-series model A y = e (least squares, Burg or Yule-Walker)",
+                            "sysid ar disturbance.csv --outputs y --na 16 --method burg --out ar.json");
+}
+Verb register_armax(CLI::App& app) {
+  return register_structure(app, Structure::armax, "ARMAX model A y = B u + C e by prediction-error minimisation",
+                            "sysid armax log.csv --inputs u --outputs y --na 10 --nb 10 --nc 10 --nk 0 --out armax.json");
+}
+Verb register_arma(CLI::App& app) {
+  return register_structure(app, Structure::arma, "ARMA time-series model A y = C e by prediction-error minimisation",
+                            "sysid arma disturbance.csv --outputs y --na 16 --nc 8 --out arma.json");
+}
+Verb register_oe(CLI::App& app) {
+  return register_structure(app, Structure::oe, "output-error model y = B/F u + e by prediction-error minimisation",
+                            "sysid oe log.csv --inputs u --outputs y --nb 4 --nf 4 --nk 1 --out oe.json");
+}
+
+}  // namespace sysid::cli

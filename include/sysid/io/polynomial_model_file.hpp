@@ -1,0 +1,69 @@
+#pragma once
+/// @file
+/// Purpose: the model file (DESIGN.md "Model files") of polynomial models, one
+/// per output over the same inputs: "type": "polynomial", the coefficient lists
+/// and the equivalent innovation-form state space under "state_space", so any
+/// reader can simulate the model.
+///
+/// Keys (one entry per output, in output order, so the shape does not depend
+/// on the number of outputs):
+///   "A": [[1, a_1, ..], ..]           "C": [[1, c_1, ..], ..]    "D": [[1, d_1, ..], ..]
+///   "B": [[[b_0, ..] per input], ..]  "F": [[[1, f_1, ..] per input], ..]
+///   "nk": [[delay per input], ..]     "noise_variance": [sigma^2, ..]
+///   "structure": "arx" | "armax" | "oe" | "ar" | "arma" | ...
+/// The polynomials are in the backward shift q^-1 (pem/polynomial_model.hpp).
+/// The state space carries K (innovation form) and the noise covariance
+/// diag(noise_variance).
+#include <sysid/io/model_json.hpp>
+#include <sysid/pem/polynomial_model.hpp>
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+namespace sysid {
+
+inline ModelFile polynomial_model_file(const std::vector<PolynomialModel>& models, const std::string& structure,
+                                       const std::vector<std::string>& input_names,
+                                       const std::vector<std::string>& output_names) {
+  const InnovationStateSpace ss = to_innovation_state_space(models);
+  ModelFile file;
+  file.type = "polynomial";
+  file.model = ss.model;
+  file.model.input_names = input_names;
+  file.model.output_names = output_names;
+  file.K = ss.K;
+  const auto l = static_cast<Eigen::Index>(models.size());
+  file.noise_covariance = Eigen::MatrixXd::Zero(l, l);
+  auto list = [](const Eigen::VectorXd& v) { return nlohmann::json(std::vector<double>(v.data(), v.data() + v.size())); };
+  nlohmann::json a = nlohmann::json::array(), b = nlohmann::json::array(), c = nlohmann::json::array(),
+                 d = nlohmann::json::array(), f = nlohmann::json::array(), nk = nlohmann::json::array(),
+                 variance = nlohmann::json::array();
+  for (Eigen::Index r = 0; r < l; ++r) {
+    const PolynomialModel& pm = models[static_cast<std::size_t>(r)];
+    file.noise_covariance(r, r) = pm.noise_variance;
+    a.push_back(list(pm.A));
+    c.push_back(list(pm.C));
+    d.push_back(list(pm.D));
+    nlohmann::json bi = nlohmann::json::array(), fi = nlohmann::json::array();
+    for (std::size_t i = 0; i < pm.B.size(); ++i) {
+      bi.push_back(list(pm.B[i]));
+      fi.push_back(list(pm.F[i]));
+    }
+    b.push_back(bi);
+    f.push_back(fi);
+    nk.push_back(pm.nk);
+    variance.push_back(pm.noise_variance);
+  }
+  file.extra["structure"] = structure;
+  file.extra["A"] = a;
+  file.extra["B"] = b;
+  file.extra["C"] = c;
+  file.extra["D"] = d;
+  file.extra["F"] = f;
+  file.extra["nk"] = nk;
+  file.extra["noise_variance"] = variance;
+  return file;
+}
+
+}  // namespace sysid
