@@ -135,7 +135,10 @@ inline BdxEstimate estimate_bdx(const Eigen::MatrixXd& A, const Eigen::MatrixXd&
   const Eigen::Index p = n * m + l * m + n * experiments;
   StreamingQR qr(p + 1);
   BdxEstimate out;
-  Eigen::MatrixXd rows(l, p + 1);
+  // Rows of `block` samples are formed together and handed to the QR at once;
+  // the recursions reuse their buffers (no allocation per sample).
+  const Eigen::Index block = 256;
+  Eigen::MatrixXd rows(block * l, p + 1), next(l, n);
   std::vector<Eigen::MatrixXd> psi(static_cast<std::size_t>(m));
   for (Eigen::Index e = 0; e < experiments; ++e) {
     const Experiment& ex = data.experiments[static_cast<std::size_t>(e)];
@@ -143,19 +146,27 @@ inline BdxEstimate estimate_bdx(const Eigen::MatrixXd& A, const Eigen::MatrixXd&
     out.samples_used += samples;
     for (auto& ps : psi) ps = Eigen::MatrixXd::Zero(l, n);
     Eigen::MatrixXd lambda = C;
-    for (Eigen::Index t = 0; t < samples; ++t) {
-      rows.setZero();
-      for (Eigen::Index q = 0; q < m; ++q) rows.middleCols(q * n, n) = psi[static_cast<std::size_t>(q)];
-      for (Eigen::Index q = 0; q < m; ++q)
-        for (Eigen::Index r = 0; r < l; ++r) rows(r, n * m + q * l + r) = ex.u(t, q);
-      rows.middleCols(n * m + l * m + e * n, n) = lambda;
-      rows.col(p) = ex.y.row(t).transpose();
-      qr.add_rows(rows);
-      for (Eigen::Index q = 0; q < m; ++q) {
-        Eigen::MatrixXd& ps = psi[static_cast<std::size_t>(q)];
-        ps = ps * A + ex.u(t, q) * C;
+    for (Eigen::Index start = 0; start < samples; start += block) {
+      const Eigen::Index count = std::min(block, samples - start);
+      rows.topRows(count * l).setZero();
+      for (Eigen::Index k = 0; k < count; ++k) {
+        const Eigen::Index t = start + k;
+        auto r_t = rows.middleRows(k * l, l);
+        for (Eigen::Index q = 0; q < m; ++q) r_t.middleCols(q * n, n) = psi[static_cast<std::size_t>(q)];
+        for (Eigen::Index q = 0; q < m; ++q)
+          for (Eigen::Index r = 0; r < l; ++r) r_t(r, n * m + q * l + r) = ex.u(t, q);
+        r_t.middleCols(n * m + l * m + e * n, n) = lambda;
+        r_t.col(p) = ex.y.row(t).transpose();
+        for (Eigen::Index q = 0; q < m; ++q) {
+          Eigen::MatrixXd& ps = psi[static_cast<std::size_t>(q)];
+          next.noalias() = ps * A;
+          next += ex.u(t, q) * C;
+          ps.swap(next);
+        }
+        next.noalias() = lambda * A;
+        lambda.swap(next);
       }
-      lambda = lambda * A;
+      qr.add_rows(rows.topRows(count * l));
     }
   }
   const Eigen::MatrixXd r = qr.r();
