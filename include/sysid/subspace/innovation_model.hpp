@@ -23,7 +23,9 @@
 ///     sequence is positive real (Faurre 1976); then
 ///       K = (G - A P C^T)(Lambda0 - C P C^T)^{-1},  cov(e) = Lambda0 - C P C^T.
 ///     Sample covariances need not be positive real: when Lambda0 - C P C^T
-///     stops being positive definite the result says so and carries no K.
+///     stops being positive definite, residuals that look white (every
+///     normalised lag covariance below 3/sqrt(N)) get K = 0; otherwise the
+///     result says so and carries no K.
 ///
 /// Preconditions: A n x n stable, C l x n, every residual block l columns with
 /// more rows than lags; violations throw std::invalid_argument.
@@ -31,6 +33,7 @@
 /// the iteration, which converges like rho(A - K C)^{2j}: slow for lightly
 /// damped noise models, hence the generous default cap.
 #include <Eigen/Dense>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -75,6 +78,18 @@ inline std::vector<Eigen::MatrixXd> residual_covariances(const std::vector<Eigen
   return lambda;
 }
 
+/// True when every normalised lag covariance Lambda_k(i,j) / sqrt(Lambda_0(i,i) Lambda_0(j,j)),
+/// k >= 1, is below 3 / sqrt(N): the residuals look white (Ljung 1999, sec. 16.6).
+inline bool white_residuals(const std::vector<Eigen::MatrixXd>& lambda, Eigen::Index samples) {
+  const Eigen::VectorXd scale = lambda[0].diagonal().cwiseMax(1e-300).cwiseSqrt();
+  const double bound = 3.0 / std::sqrt(static_cast<double>(samples));
+  for (std::size_t k = 1; k < lambda.size(); ++k) {
+    const Eigen::MatrixXd normalised = scale.cwiseInverse().asDiagonal() * lambda[k] * scale.cwiseInverse().asDiagonal();
+    if (normalised.cwiseAbs().maxCoeff() >= bound) return false;
+  }
+  return true;
+}
+
 /// Purpose: the innovation model described in the file comment.
 /// Example: `auto nm = innovation_model(A, C, {y - y_sim});  if (nm.status == ...converged) K = nm.K;`
 inline InnovationModelResult innovation_model(const Eigen::MatrixXd& A, const Eigen::MatrixXd& C,
@@ -89,6 +104,8 @@ inline InnovationModelResult innovation_model(const Eigen::MatrixXd& A, const Ei
   InnovationModelResult out;
   out.lags = options.lags > 0 ? options.lags : std::max(10, 2 * static_cast<int>((n + l - 1) / l));
   const std::vector<Eigen::MatrixXd> lambda = residual_covariances(residuals, out.lags);
+  Eigen::Index total_samples = 0;
+  for (const auto& v : residuals) total_samples += v.rows();
   out.lambda0 = 0.5 * (lambda[0] + lambda[0].transpose());
   out.innovation_covariance = out.lambda0;
 
@@ -109,8 +126,17 @@ inline InnovationModelResult innovation_model(const Eigen::MatrixXd& A, const Ei
     const Eigen::MatrixXd cov = out.lambda0 - C * P * C.transpose();
     Eigen::LLT<Eigen::MatrixXd> llt(0.5 * (cov + cov.transpose()));
     if (llt.info() != Eigen::Success) {
-      out.status = InnovationModelResult::Status::not_positive_real;
       out.iterations = j;
+      if (white_residuals(lambda, total_samples)) {
+        // Sample covariances of white residuals often miss positive realness by
+        // sampling error alone; their innovation model is K = 0, cov(e) = Lambda0.
+        out.status = InnovationModelResult::Status::converged;
+        out.K = Eigen::MatrixXd::Zero(n, l);
+        out.P = Eigen::MatrixXd::Zero(n, n);
+        out.message = "residuals white within 3/sqrt(N) at every lag: K = 0";
+        return out;
+      }
+      out.status = InnovationModelResult::Status::not_positive_real;
       out.message = "the residual covariances are not positive real for this (A, C): no innovation model";
       return out;
     }
