@@ -240,4 +240,56 @@ EstimationData load_estimation_data(const std::string& log_path, const std::stri
   return out;
 }
 
+ModelChannels model_channels(const LogArgs& args, const ModelFile& file, bool with_outputs) {
+  ModelChannels ch;
+  ch.inputs = split_names(args.inputs, "--inputs");
+  if (ch.inputs.empty()) ch.inputs = model_input_names(file);
+  if (static_cast<Eigen::Index>(ch.inputs.size()) != file.model.inputs())
+    throw std::invalid_argument("the model has " + std::to_string(file.model.inputs()) + " input(s), --inputs names " +
+                                std::to_string(ch.inputs.size()));
+  if (!with_outputs) return ch;
+  ch.outputs = split_names(args.outputs, "--outputs");
+  if (ch.outputs.empty()) ch.outputs = model_output_names(file);
+  if (static_cast<Eigen::Index>(ch.outputs.size()) != file.model.outputs())
+    throw std::invalid_argument("the model has " + std::to_string(file.model.outputs()) + " output(s), --outputs names " +
+                                std::to_string(ch.outputs.size()));
+  return ch;
+}
+
+CompareOptions compare_options_for(const ModelFile& file, const std::string& x0_mode, const std::string& model_path) {
+  CompareOptions o;
+  o.estimate_x0 = x0_mode == "estimate";
+  if (x0_mode == "model") {
+    if (file.x0.size() == 0) throw DataError(model_path, 0, 0, "--x0 model: the model file has no x0");
+    o.x0 = file.x0;
+  }
+  o.input_offset = file.input_offset;
+  o.output_offset = file.output_offset;
+  return o;
+}
+
+void add_welch_options(CLI::App& cmd, WelchArgs& args) {
+  cmd.add_option("--nfft", args.nfft, "segment (FFT) length; halved until it fits the log")
+      ->capture_default_str()
+      ->check(CLI::Range(Eigen::Index{8}, Eigen::Index{1} << 26));
+  cmd.add_option("--overlap", args.overlap, "fraction of a segment shared with the next, 0 <= overlap < 1")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 0.99));
+  cmd.add_option("--window", args.window, "segment taper")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"hann", "hamming", "rectangular", "blackman-harris", "flattop"}));
+  cmd.add_option("--detrend", args.detrend, "removed from every segment before the window")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"none", "mean", "linear"}));
+}
+
+WelchOptions welch_options(const WelchArgs& args) {
+  WelchOptions o;
+  o.nfft = args.nfft;
+  o.overlap = args.overlap;
+  o.window = parse_window(args.window);
+  o.detrend = args.detrend == "none" ? Detrend::none : args.detrend == "linear" ? Detrend::linear : Detrend::mean;
+  return o;
+}
+
 }  // namespace sysid::cli

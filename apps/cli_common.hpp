@@ -6,6 +6,8 @@
 #include <sysid/core/io_data.hpp>
 #include <sysid/io/csv.hpp>
 #include <sysid/io/model_json.hpp>
+#include <sysid/spectral/welch.hpp>
+#include <sysid/validate/compare.hpp>
 
 #include <CLI/CLI.hpp>
 #include <Eigen/Dense>
@@ -90,6 +92,30 @@ void note(const std::string& verb, const std::string& message);
 
 /// Vector of doubles -> JSON list (NaN written as null: JSON has no NaN).
 nlohmann::json to_json_list(const Eigen::VectorXd& v);
+
+/// The log columns a model runs on: --inputs / --outputs as typed, else the
+/// model's channel names; their number must match the model's (std::invalid_argument).
+/// Outputs are resolved only when `with_outputs`.
+struct ModelChannels {
+  std::vector<std::string> inputs, outputs;
+};
+ModelChannels model_channels(const LogArgs& args, const ModelFile& file, bool with_outputs);
+
+/// CompareOptions for --x0 estimate|zero|model and the model file's offsets
+/// (DataError naming `model_path` when "model" is asked and the file has no x0).
+CompareOptions compare_options_for(const ModelFile& file, const std::string& x0_mode, const std::string& model_path);
+
+/// The Welch segment options shared by the spectral verbs.
+struct WelchArgs {
+  Eigen::Index nfft = 1024;
+  double overlap = 0.5;
+  std::string window = "hann";
+  std::string detrend = "mean";
+};
+/// Adds --nfft, --overlap, --window and --detrend.
+void add_welch_options(CLI::App& cmd, WelchArgs& args);
+/// WelchOptions from the typed options (other fields at their defaults).
+WelchOptions welch_options(const WelchArgs& args);
 
 /// Estimation data and, when the user asked for it, validation data.
 struct EstimationData {

@@ -110,28 +110,12 @@ void run_compare(const CompareArgs& a) {
     throw DataError(a.model_path, 0, 0,
                     "--predict needs the model's Kalman gain K, and this model file has none (identify an innovation "
                     "model, e.g. with sysid n4sid)");
-  std::vector<std::string> inputs = split_names(a.log.inputs, "--inputs");
-  if (inputs.empty()) inputs = model_input_names(file);
-  std::vector<std::string> outputs = split_names(a.log.outputs, "--outputs");
-  if (outputs.empty()) outputs = model_output_names(file);
-  if (static_cast<Eigen::Index>(inputs.size()) != file.model.inputs())
-    throw std::invalid_argument("the model has " + std::to_string(file.model.inputs()) + " input(s), --inputs names " +
-                                std::to_string(inputs.size()));
-  if (static_cast<Eigen::Index>(outputs.size()) != file.model.outputs())
-    throw std::invalid_argument("the model has " + std::to_string(file.model.outputs()) + " output(s), --outputs names " +
-                                std::to_string(outputs.size()));
+  const auto [inputs, outputs] = model_channels(a.log, file, true);
   const LoadedLog log = load_log(a.log_path, make_log_options(a.log, inputs, outputs));
   const StateSpace model = model_for_sample_time(file, log.data.Ts, a.model_path, verb);
 
-  CompareOptions o;
+  CompareOptions o = compare_options_for(file, a.x0, a.model_path);
   o.predict_steps = a.predict;
-  o.estimate_x0 = a.x0 == "estimate";
-  if (a.x0 == "model") {
-    if (file.x0.size() == 0) throw DataError(a.model_path, 0, 0, "--x0 model: the model file has no x0");
-    o.x0 = file.x0;
-  }
-  o.input_offset = file.input_offset;
-  o.output_offset = file.output_offset;
   const CompareResult r = compare(model, file.K, log.data.experiments.front(), o);
 
   const std::string how = a.predict == 0 ? std::string("simulation") : std::to_string(a.predict) + "-step-ahead prediction";

@@ -23,10 +23,7 @@ constexpr Eigen::Index kMaxPlotPairs = 8;
 struct FrfArgs {
   std::string log_path;
   LogArgs log;
-  Eigen::Index nfft = 1024;
-  double overlap = 0.5;
-  std::string window = "hann";
-  std::string detrend = "mean";
+  WelchArgs welch;
   std::string estimator = "h1";
   double confidence = 0.95;
   std::string out, plot;
@@ -44,15 +41,12 @@ void run_frf(const FrfArgs& a) {
   const LoadedLog log = load_log(a.log_path, make_log_options(a.log, inputs, outputs));
 
   FrfOptions o;
-  o.welch.nfft = a.nfft;
-  o.welch.overlap = a.overlap;
-  o.welch.window = parse_window(a.window);
-  o.welch.detrend = a.detrend == "none" ? Detrend::none : a.detrend == "linear" ? Detrend::linear : Detrend::mean;
+  o.welch = welch_options(a.welch);
   o.estimator = a.estimator == "h2" ? FrfEstimator::h2 : FrfEstimator::h1;
   o.confidence = a.confidence;
   const FrfResult r = frf(log.data, o);
-  if (r.nfft != a.nfft)
-    note(verb, "--nfft " + std::to_string(a.nfft) + " is longer than the log (" + std::to_string(log.data.total_samples()) +
+  if (r.nfft != a.welch.nfft)
+    note(verb, "--nfft " + std::to_string(a.welch.nfft) + " is longer than the log (" + std::to_string(log.data.total_samples()) +
                    " samples): using " + std::to_string(r.nfft));
   std::cout << r.brief_report() << "\n";
   for (const auto& w : r.warnings) warn(verb, w);
@@ -144,18 +138,7 @@ Verb register_frf(CLI::App& app) {
       "frf", "Non-parametric frequency response (H1/H2) with coherence and confidence bounds, as CSV (and a Bode plot)");
   cmd->add_option("log", args->log_path, "CSV log with the input and output columns")->required();
   add_log_options(*cmd, args->log, {});
-  cmd->add_option("--nfft", args->nfft, "segment (FFT) length; halved until it fits the log")
-      ->capture_default_str()
-      ->check(CLI::Range(Eigen::Index{8}, Eigen::Index{1} << 26));
-  cmd->add_option("--overlap", args->overlap, "fraction of a segment shared with the next, 0 <= overlap < 1")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 0.99));
-  cmd->add_option("--window", args->window, "segment taper")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"hann", "hamming", "rectangular", "blackman-harris", "flattop"}));
-  cmd->add_option("--detrend", args->detrend, "removed from every segment before the window")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"none", "mean", "linear"}));
+  add_welch_options(*cmd, args->welch);
   cmd->add_option("--estimator", args->estimator, "h1 (noise on the outputs) or h2 (noise on the inputs)")
       ->capture_default_str()
       ->check(CLI::IsMember({"h1", "h2"}));

@@ -22,10 +22,7 @@ struct PsdArgs {
   std::optional<double> ts;
   std::string time_column = "t";
   std::string nan_policy = "error";
-  Eigen::Index nfft = 1024;
-  double overlap = 0.5;
-  std::string window = "hann";
-  std::string detrend = "mean";
+  WelchArgs welch;
   std::string scaling = "density";
   double confidence = 0.95;
   std::string out, plot;
@@ -45,11 +42,7 @@ void run_psd(const PsdArgs& a) {
   const LoadedLog log = load_log(a.log_path, make_log_options(la, {}, columns));
   const Eigen::MatrixXd& x = log.data.experiments.front().y;
 
-  WelchOptions o;
-  o.nfft = a.nfft;
-  o.overlap = a.overlap;
-  o.window = parse_window(a.window);
-  o.detrend = a.detrend == "none" ? Detrend::none : a.detrend == "linear" ? Detrend::linear : Detrend::mean;
+  WelchOptions o = welch_options(a.welch);
   o.scaling = a.scaling == "spectrum" ? SpectralScaling::spectrum : SpectralScaling::density;
   const PowerSpectrum ps = welch_psd(x, 1.0 / log.data.Ts, o);
   const auto [lo_factor, hi_factor] = psd_confidence_factors(ps.dof, a.confidence);
@@ -124,18 +117,7 @@ Verb register_psd(CLI::App& app) {
   cmd->add_option("--nan-policy", args->nan_policy, "NaN/Inf/empty cells: error, drop (leading/trailing rows), interpolate")
       ->check(CLI::IsMember({"error", "drop", "interpolate"}))
       ->capture_default_str();
-  cmd->add_option("--nfft", args->nfft, "segment (FFT) length; halved until it fits the log")
-      ->capture_default_str()
-      ->check(CLI::Range(Eigen::Index{8}, Eigen::Index{1} << 26));
-  cmd->add_option("--overlap", args->overlap, "fraction of a segment shared with the next, 0 <= overlap < 1")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 0.99));
-  cmd->add_option("--window", args->window, "segment taper")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"hann", "hamming", "rectangular", "blackman-harris", "flattop"}));
-  cmd->add_option("--detrend", args->detrend, "removed from every segment before the window")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"none", "mean", "linear"}));
+  add_welch_options(*cmd, args->welch);
   cmd->add_option("--scaling", args->scaling, "density (units^2/Hz) or spectrum (units^2: reads sine powers, best with flattop)")
       ->capture_default_str()
       ->check(CLI::IsMember({"density", "spectrum"}));

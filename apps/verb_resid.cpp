@@ -72,16 +72,7 @@ void run_resid(const ResidArgs& a) {
                                                  "max-lag - noise-params)");
   if (!a.out.empty()) refuse_to_overwrite_input(a.out, {a.model_path, a.log_path});
   const ModelFile file = load_model(a.model_path);
-  std::vector<std::string> inputs = split_names(a.log.inputs, "--inputs");
-  if (inputs.empty()) inputs = model_input_names(file);
-  std::vector<std::string> outputs = split_names(a.log.outputs, "--outputs");
-  if (outputs.empty()) outputs = model_output_names(file);
-  if (static_cast<Eigen::Index>(inputs.size()) != file.model.inputs())
-    throw std::invalid_argument("the model has " + std::to_string(file.model.inputs()) + " input(s), --inputs names " +
-                                std::to_string(inputs.size()));
-  if (static_cast<Eigen::Index>(outputs.size()) != file.model.outputs())
-    throw std::invalid_argument("the model has " + std::to_string(file.model.outputs()) + " output(s), --outputs names " +
-                                std::to_string(outputs.size()));
+  const auto [inputs, outputs] = model_channels(a.log, file, true);
   const LoadedLog log = load_log(a.log_path, make_log_options(a.log, inputs, outputs));
   const StateSpace model = model_for_sample_time(file, log.data.Ts, a.model_path, verb);
   const Experiment& data = log.data.experiments.front();
@@ -94,14 +85,7 @@ void run_resid(const ResidArgs& a) {
     note(verb, a.model_path +
                    " has no Kalman gain K (no noise model): the residuals are the simulation errors y - G u, white only "
                    "if the disturbance on the outputs is white");
-  CompareOptions o;
-  o.estimate_x0 = a.x0 == "estimate";
-  if (a.x0 == "model") {
-    if (file.x0.size() == 0) throw DataError(a.model_path, 0, 0, "--x0 model: the model file has no x0");
-    o.x0 = file.x0;
-  }
-  o.input_offset = file.input_offset;
-  o.output_offset = file.output_offset;
+  const CompareOptions o = compare_options_for(file, a.x0, a.model_path);
   const Eigen::MatrixXd residuals = model_residuals(model, file.K, data, o);
   if (!residuals.allFinite())
     throw NumericalError("the residuals of " + a.model_path + " are not finite: its " +

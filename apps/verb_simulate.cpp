@@ -23,19 +23,8 @@ void run_simulate(const SimulateArgs& a) {
   const std::string verb = "simulate";
   refuse_to_overwrite_input(a.out, {a.model_path, a.log_path});
   const ModelFile file = load_model(a.model_path);
-  std::vector<std::string> inputs = split_names(a.log.inputs, "--inputs");
-  if (inputs.empty()) inputs = model_input_names(file);
-  if (static_cast<Eigen::Index>(inputs.size()) != file.model.inputs())
-    throw std::invalid_argument("the model has " + std::to_string(file.model.inputs()) + " input(s), --inputs names " +
-                                std::to_string(inputs.size()));
-  std::vector<std::string> outputs;
-  if (a.x0 == "estimate") {
-    outputs = split_names(a.log.outputs, "--outputs");
-    if (outputs.empty()) outputs = model_output_names(file);
-    if (static_cast<Eigen::Index>(outputs.size()) != file.model.outputs())
-      throw std::invalid_argument("the model has " + std::to_string(file.model.outputs()) + " output(s), --outputs names " +
-                                  std::to_string(outputs.size()));
-  }
+  // Outputs are read only to estimate x0.
+  const auto [inputs, outputs] = model_channels(a.log, file, a.x0 == "estimate");
   const LoadedLog log = load_log(a.log_path, make_log_options(a.log, inputs, outputs));
   const StateSpace model = model_for_sample_time(file, log.data.Ts, a.model_path, verb);
   const Experiment& e = log.data.experiments.front();
