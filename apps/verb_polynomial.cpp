@@ -133,7 +133,7 @@ void run_polynomial(Structure structure, const PolynomialArgs& a) {
       report << verb << " output '" << est.output_name(r) << "': " << res.iterations << " iterations, "
              << (res.status == PemResult::Status::converged ? "converged" : "NOT converged") << " (" << res.termination
              << "), cost " << fmt(res.initial_cost, 5) << " -> " << fmt(res.final_cost, 5) << ", condition "
-             << fmt(res.condition, 3) << "\n";
+             << fmt(res.condition, 3) << (res.start.empty() ? "" : ", from the " + res.start + " start") << "\n";
       if (res.status != PemResult::Status::converged) converged = false;
       warnings.insert(warnings.end(), res.warnings.begin(), res.warnings.end());
     }

@@ -8,7 +8,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 #include <tuple>
 
@@ -72,13 +74,19 @@ Eigen::VectorXd reflect_into_unit_circle(const Eigen::VectorXd& monic) {
       changed = true;
     }
   if (!changed) return monic;
-  // Rebuild [1, p_1..p_n] from the roots: prod (1 - z_k q^-1).
+  return detail::monic_from_roots(roots);
+}
+
+namespace detail {
+Eigen::VectorXd monic_from_roots(const Eigen::VectorXcd& roots) {
+  // [1, p_1..p_n] of prod (1 - z_k q^-1); real when the roots come in conjugate pairs.
   Eigen::VectorXcd poly = Eigen::VectorXcd::Zero(roots.size() + 1);
   poly(0) = 1.0;
   for (Eigen::Index k = 0; k < roots.size(); ++k)
     for (Eigen::Index j = k + 1; j >= 1; --j) poly(j) -= roots(k) * poly(j - 1);
   return poly.real();
 }
+}  // namespace detail
 
 namespace {
 
@@ -278,6 +286,193 @@ void output_error_start(PolynomialModel& model, const std::vector<ScaledRecord>&
   }
 }
 
+/// One Levenberg-Marquardt run from `model` (scaled units); the model is
+/// updated in place. `r` ends as the R factor of [J eps] at the final model.
+struct LmRun {
+  PemResult::Status status = PemResult::Status::failed;
+  std::string termination;
+  int iterations = 0;
+  double initial_cost = 0, final_cost = 0;
+  std::vector<double> cost_history;
+  Eigen::MatrixXd r;
+  double lambda = 1e-3;  ///< Marquardt damping at the end (a continued run starts from it)
+};
+
+LmRun levenberg_marquardt(PolynomialModel& model, const std::vector<ScaledRecord>& records, Eigen::Index p,
+                          const PemOptions& options, int max_iterations, double initial_lambda = 1e-3) {
+  LmRun run;
+  Eigen::Index samples = 0;
+  for (const auto& r : records) samples += r.y.size();
+  Eigen::VectorXd theta = pack_parameters(model);
+  double cost = cost_of(model, records);
+  run.initial_cost = cost;
+  run.cost_history.push_back(cost);
+  double& lambda = run.lambda;
+  lambda = initial_lambda;
+  double nu = 2.0;
+  Eigen::MatrixXd& r = run.r;
+  r = jacobian_factor(model, records, p);
+  run.status = PemResult::Status::max_iterations;
+  run.termination = "reached max_iterations (" + std::to_string(options.max_iterations) + ")";
+  int iteration = 0;
+  bool need_factor = false;
+  while (iteration < max_iterations) {
+    if (need_factor) r = jacobian_factor(model, records, p);
+    need_factor = false;
+    const Eigen::MatrixXd r11 = r.topLeftCorner(p, p).triangularView<Eigen::Upper>();
+    const Eigen::VectorXd r12 = r.col(p).head(p);
+    const Eigen::VectorXd gradient = r11.transpose() * r12;  // J^T eps
+    if (gradient.cwiseAbs().maxCoeff() <= options.gradient_tolerance * (1.0 + cost)) {
+      run.status = PemResult::Status::converged;
+      run.termination = "gradient below tolerance";
+      break;
+    }
+    // The full Gauss-Newton step dtheta = -R11^-1 r12 has Mahalanobis length
+    // ||r12|| / sigma in the metric of the parameter covariance sigma^2 (J^T J)^-1
+    // (Ljung 1999, eq. 9.17): below a fraction of one standard deviation, further
+    // iterations change nothing the data can distinguish.
+    const double sigma2 = 2.0 * cost / std::max(1.0, static_cast<double>(samples - p));
+    // Rounding in an ill-conditioned or over-parametrised Jacobian can hide the
+    // last decrease; it is "working precision" when the Gauss-Newton minimiser
+    // lies inside the parameters' confidence region, ||r12||^2 / sigma^2 <= p
+    // (the mean of the chi-square(p) that bounds it).
+    const bool inside_confidence_region = r12.squaredNorm() <= static_cast<double>(p) * sigma2;
+    if (options.step_significance_tolerance > 0 &&
+        r12.squaredNorm() <= options.step_significance_tolerance * options.step_significance_tolerance * sigma2) {
+      run.status = PemResult::Status::converged;
+      std::ostringstream why;
+      why << "Gauss-Newton step below " << options.step_significance_tolerance << " standard deviations of the parameters";
+      run.termination = why.str();
+      break;
+    }
+    ++iteration;
+    // Marquardt scaling by the column norms of J (= those of R11).
+    Eigen::VectorXd scale = r11.colwise().norm().transpose();
+    for (Eigen::Index k = 0; k < p; ++k) scale(k) = std::max(scale(k), 1e-12 * std::max(1.0, scale.maxCoeff()));
+    bool accepted = false;
+    int rejected = 0;  // a step accepted only after rejections is short because of the damping, not convergence
+    while (!accepted) {
+      Eigen::MatrixXd stacked(2 * p, p);
+      stacked << r11, std::sqrt(lambda) * scale.asDiagonal().toDenseMatrix();
+      Eigen::VectorXd rhs = Eigen::VectorXd::Zero(2 * p);
+      rhs.head(p) = -r12;
+      const Eigen::VectorXd step = stacked.householderQr().solve(rhs);
+      const double predicted = 0.5 * (r12.squaredNorm() - (r11 * step + r12).squaredNorm());
+      PolynomialModel trial = model;
+      unpack_parameters(theta + step, trial);
+      double trial_cost = std::numeric_limits<double>::infinity();
+      if (denominators_stable(trial)) trial_cost = cost_of(trial, records);
+      const double rho = predicted > 0 ? (cost - trial_cost) / predicted : -1.0;
+      if (std::isfinite(trial_cost) && rho > 0) {
+        const double decrease = cost - trial_cost;
+        const bool small_step = step.norm() <= options.parameter_tolerance * (theta.norm() + options.parameter_tolerance);
+        theta += step;
+        model = trial;
+        cost = trial_cost;
+        run.cost_history.push_back(cost);
+        // Nielsen (1999), but a step the quadratic model predicted well (rho > 0.75)
+        // shrinks the damping tenfold: on ill-conditioned problems the damped step
+        // is otherwise tiny for dozens of iterations.
+        lambda *= rho > 0.75 ? 0.1 : std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
+        nu = 2.0;
+        accepted = true;
+        need_factor = true;
+        // The decrease and step-length tests only mean convergence for a step
+        // close to the Gauss-Newton one: a strongly damped step is short and
+        // gains little because of the damping.
+        if (rejected > 0 && decrease <= 1e-3 * sigma2 && inside_confidence_region) {
+          // Damping had to grow and the step gained nothing the data resolve.
+          run.status = PemResult::Status::converged;
+          run.termination = "no step lowers the cost appreciably (minimum to working precision: the Gauss-Newton "
+                            "minimiser lies inside the parameters' confidence region)";
+        } else if (rejected > 0 || predicted < 0.25 * r12.squaredNorm()) {
+        } else if (decrease <= options.function_tolerance * cost) {
+          run.status = PemResult::Status::converged;
+          run.termination = "relative cost decrease below tolerance";
+        } else if (small_step) {
+          run.status = PemResult::Status::converged;
+          run.termination = "step below tolerance";
+        }
+      } else {
+        lambda *= nu;
+        nu *= 2.0;
+        ++rejected;
+        if (lambda > 1e16) break;
+      }
+    }
+    if (run.status == PemResult::Status::converged) break;
+    if (!accepted) {
+      // No damped step lowers the cost: at a minimum to working precision, or
+      // stuck. Working precision when the Gauss-Newton minimiser lies inside the
+      // parameters' confidence region, ||r12||^2 / sigma^2 <= p (the mean of the
+      // chi-square(p) that bounds it): rounding in an ill-conditioned or
+      // over-parametrised Jacobian then hides a decrease the data cannot resolve.
+      const bool flat = gradient.cwiseAbs().maxCoeff() <= 1e-6 * (1.0 + cost) || inside_confidence_region;
+      run.status = flat ? PemResult::Status::converged : PemResult::Status::failed;
+      run.termination = flat ? "no step lowers the cost further (minimum to working precision: the Gauss-Newton "
+                               "minimiser lies inside the parameters' confidence region)"
+                             : "no step lowers the cost although the gradient is not small (damping limit reached)";
+      break;
+    }
+  }
+  run.iterations = iteration;
+  run.final_cost = cost;
+  if (need_factor) r = jacobian_factor(model, records, p);
+
+  return run;
+}
+
+/// Order of the high-order ARX in the Hannan-Rissanen start (PemOptions::initial_arx_order).
+int hannan_rissanen_order(const PemOptions& options, double total) {
+  int high = options.initial_arx_order;
+  if (high == 0) {
+    int max_nb = 0;
+    for (int b : options.nb) max_nb = std::max(max_nb, b);
+    high = std::max(3 * std::max({options.na, max_nb, options.nc}), 20);
+    high = std::min<int>(high, static_cast<int>(total / 20.0));
+  }
+  if (high <= options.nc) throw std::invalid_argument("pem: too few samples for the Hannan-Rissanen start of these orders");
+  return high;
+}
+
+IoData records_as_data(const std::vector<ScaledRecord>& records, double Ts) {
+  IoData d;
+  d.Ts = Ts;
+  for (const auto& r : records) d.experiments.push_back({r.u, r.y, "scaled record"});
+  return d;
+}
+
+/// ARMAX start from an output-error fit (scaled units): B and F of
+/// OE(nb, nf = min(na, nc)) fitted by PEM, A = C = F zero-padded to na and nc.
+/// The ARMAX predictor then is the OE one (white measurement noise,
+/// y = B/F u + e), the start of highest likelihood when the noise is white
+/// at the output. For lightly damped
+/// plants sampled fast this starts next to the optimum where the
+/// Hannan-Rissanen start stalls: its high-order ARX cannot whiten a noise
+/// model with roots next to the unit circle. Returns false when the OE fit fails.
+bool armax_output_error_start(PolynomialModel& model, const std::vector<ScaledRecord>& records, const PemOptions& options) {
+  const Eigen::Index m = model.inputs();
+  PemOptions oe;
+  oe.nb = options.nb;
+  oe.nk = model.nk;
+  // F of order min(na, nc), zero-padded into both A and C: C / A = 1 exactly
+  // (roots at the origin fill the higher order).
+  const int nf = std::min(options.na, options.nc);
+  oe.nf.assign(static_cast<std::size_t>(m), nf);
+  oe.max_iterations = options.max_iterations;
+  oe.steiglitz_mcbride_iterations = options.steiglitz_mcbride_iterations;
+  oe.remove_means = false;
+  const PemResult fit = pem(records_as_data(records, model.Ts), oe);
+  if (fit.status == PemResult::Status::failed) return false;
+  const Eigen::VectorXd& f = fit.model.F.front();
+  model.A = Eigen::VectorXd::Zero(options.na + 1);
+  model.A.head(f.size()) = f;
+  model.C = Eigen::VectorXd::Zero(options.nc + 1);
+  model.C.head(f.size()) = f;
+  model.B = fit.model.B;
+  return true;
+}
+
 double scaled_condition(const Eigen::MatrixXd& r11) {
   Eigen::VectorXd norms = r11.colwise().norm().transpose();
   for (Eigen::Index k = 0; k < norms.size(); ++k)
@@ -346,103 +541,59 @@ PemResult pem(IoData data, const PemOptions& options) {
   if (p == 0) throw std::invalid_argument("pem: need at least one parameter");
   if (static_cast<double>(p) >= total) throw std::invalid_argument("pem: more parameters than samples");
 
-  // Initial values.
+  // Initial values and Levenberg-Marquardt.
+  LmRun run;
   if (has_f) {
     output_error_start(model, records, options.steiglitz_mcbride_iterations, res.warnings);
+    run = levenberg_marquardt(model, records, p, options, options.max_iterations);
   } else if (options.nc > 0) {
-    int max_nb = 0;
-    for (int b : options.nb) max_nb = std::max(max_nb, b);
-    int high = options.initial_arx_order;
-    if (high == 0) {
-      high = std::max(3 * std::max({options.na, max_nb, options.nc}), 20);
-      high = std::min<int>(high, static_cast<int>(total / 20.0));
+    const bool try_hr = options.start != PemStart::output_error;
+    const bool try_oe = options.start != PemStart::hannan_rissanen && options.na > 0 && m > 0;
+    // Both starts run a few iterations; only the lower cost goes on (the other
+    // is usually far off, and a full run from each would double the time).
+    const int trial = try_hr && try_oe ? std::min(options.max_iterations, 10) : options.max_iterations;
+    if (try_hr) {
+      hannan_rissanen(model, records, hannan_rissanen_order(options, total));
+      run = levenberg_marquardt(model, records, p, options, trial);
+      res.start = "hannan-rissanen";
     }
-    if (high <= options.nc) throw std::invalid_argument("pem: too few samples for the Hannan-Rissanen start of these orders");
-    hannan_rissanen(model, records, high);
+    if (try_oe) {
+      PolynomialModel alternative = model;
+      if (armax_output_error_start(alternative, records, options)) {
+        LmRun second = levenberg_marquardt(alternative, records, p, options, trial);
+        if (!try_hr || second.final_cost < run.final_cost) {
+          run = std::move(second);
+          model = std::move(alternative);
+          res.start = "output-error";
+        }
+      } else if (!try_hr) {
+        throw NumericalError("pem: the output-error start of the ARMAX model failed (the OE or MA sub-fit did not converge)");
+      }
+    }
+    if (run.status != PemResult::Status::converged && run.iterations < options.max_iterations && trial < options.max_iterations) {
+      LmRun rest = levenberg_marquardt(model, records, p, options, options.max_iterations - run.iterations, run.lambda);
+      rest.iterations += run.iterations;
+      rest.initial_cost = run.initial_cost;
+      run.cost_history.insert(run.cost_history.end(), rest.cost_history.begin() + 1, rest.cost_history.end());
+      rest.cost_history = std::move(run.cost_history);
+      run = std::move(rest);
+    }
   } else {
     std::vector<int> nb(options.nb.begin(), options.nb.end());
     const RegressionSolution sol = arx_regression(records, options.na, nb, nk, nullptr, 0);
     Eigen::VectorXd theta = pack_parameters(model);
     theta.head(sol.theta.size()) = sol.theta;
     unpack_parameters(theta, model);
+    run = levenberg_marquardt(model, records, p, options, options.max_iterations);
   }
-
-  // Levenberg-Marquardt.
-  Eigen::VectorXd theta = pack_parameters(model);
-  double cost = cost_of(model, records);
-  res.initial_cost = cost;
-  res.cost_history.push_back(cost);
-  double lambda = 1e-3, nu = 2.0;
-  Eigen::MatrixXd r = jacobian_factor(model, records, p);
-  res.status = PemResult::Status::max_iterations;
-  res.termination = "reached max_iterations (" + std::to_string(options.max_iterations) + ")";
-  int iteration = 0;
-  bool need_factor = false;
-  while (iteration < options.max_iterations) {
-    if (need_factor) r = jacobian_factor(model, records, p);
-    need_factor = false;
-    const Eigen::MatrixXd r11 = r.topLeftCorner(p, p).triangularView<Eigen::Upper>();
-    const Eigen::VectorXd r12 = r.col(p).head(p);
-    const Eigen::VectorXd gradient = r11.transpose() * r12;  // J^T eps
-    if (gradient.cwiseAbs().maxCoeff() <= options.gradient_tolerance * (1.0 + cost)) {
-      res.status = PemResult::Status::converged;
-      res.termination = "gradient below tolerance";
-      break;
-    }
-    ++iteration;
-    // Marquardt scaling by the column norms of J (= those of R11).
-    Eigen::VectorXd scale = r11.colwise().norm().transpose();
-    for (Eigen::Index k = 0; k < p; ++k) scale(k) = std::max(scale(k), 1e-12 * std::max(1.0, scale.maxCoeff()));
-    bool accepted = false;
-    while (!accepted) {
-      Eigen::MatrixXd stacked(2 * p, p);
-      stacked << r11, std::sqrt(lambda) * scale.asDiagonal().toDenseMatrix();
-      Eigen::VectorXd rhs = Eigen::VectorXd::Zero(2 * p);
-      rhs.head(p) = -r12;
-      const Eigen::VectorXd step = stacked.householderQr().solve(rhs);
-      const double predicted = 0.5 * (r12.squaredNorm() - (r11 * step + r12).squaredNorm());
-      PolynomialModel trial = model;
-      unpack_parameters(theta + step, trial);
-      double trial_cost = std::numeric_limits<double>::infinity();
-      if (denominators_stable(trial)) trial_cost = cost_of(trial, records);
-      const double rho = predicted > 0 ? (cost - trial_cost) / predicted : -1.0;
-      if (std::isfinite(trial_cost) && rho > 0) {
-        const double decrease = cost - trial_cost;
-        const bool small_step = step.norm() <= options.parameter_tolerance * (theta.norm() + options.parameter_tolerance);
-        theta += step;
-        model = trial;
-        cost = trial_cost;
-        res.cost_history.push_back(cost);
-        lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
-        nu = 2.0;
-        accepted = true;
-        need_factor = true;
-        if (decrease <= options.function_tolerance * cost) {
-          res.status = PemResult::Status::converged;
-          res.termination = "relative cost decrease below tolerance";
-        } else if (small_step) {
-          res.status = PemResult::Status::converged;
-          res.termination = "step below tolerance";
-        }
-      } else {
-        lambda *= nu;
-        nu *= 2.0;
-        if (lambda > 1e16) break;
-      }
-    }
-    if (res.status == PemResult::Status::converged) break;
-    if (!accepted) {
-      // No damped step lowers the cost: at a minimum to working precision, or stuck.
-      const bool flat = gradient.cwiseAbs().maxCoeff() <= 1e-6 * (1.0 + cost);
-      res.status = flat ? PemResult::Status::converged : PemResult::Status::failed;
-      res.termination = flat ? "no step lowers the cost further (minimum to working precision)"
-                             : "no step lowers the cost although the gradient is not small (damping limit reached)";
-      break;
-    }
-  }
-  res.iterations = iteration;
-  res.final_cost = cost;
-  if (need_factor) r = jacobian_factor(model, records, p);
+  res.status = run.status;
+  res.termination = run.termination;
+  res.iterations = run.iterations;
+  res.initial_cost = run.initial_cost;
+  res.final_cost = run.final_cost;
+  res.cost_history = std::move(run.cost_history);
+  const double cost = run.final_cost;
+  const Eigen::MatrixXd& r = run.r;
 
   // Covariance sigma^2 (J^T J)^-1 and conditioning at the solution (scaled units).
   const Eigen::MatrixXd r11 = r.topLeftCorner(p, p).triangularView<Eigen::Upper>();

@@ -27,7 +27,13 @@
 ///    rejected and the damping increased, as for a cost increase.
 ///  - Initial values: ARMAX/ARMA by Hannan-Rissanen (high-order ARX, its
 ///    residuals as a measured noise input, then least squares for A, B, C;
-///    E. J. Hannan & J. Rissanen, Biometrika 69 (1982) 81-94); OE from an ARX of
+///    E. J. Hannan & J. Rissanen, Biometrika 69 (1982) 81-94). ARMAX also from
+///    an output-error start (B, F of an OE fit with nf = min(na, nc), then
+///    A = C = F zero-padded, so the predictor is the OE one); both are
+///    iterated a few steps and the lower cost goes on (PemOptions::start). The second start matters for lightly damped
+///    plants sampled fast with white measurement noise (C = A, roots next to
+///    the unit circle), where the high-order ARX cannot whiten the noise and
+///    the Hannan-Rissanen start leads to a poor local minimum. OE from an ARX of
 ///    the same orders (F_i = the ARX A) refined by Steiglitz-McBride iterations
 ///    (data filtered by 1/F, K. Steiglitz & L. McBride, IEEE TAC 10 (1965) 461).
 ///    Unstable initial denominators are reflected into the unit circle.
@@ -50,6 +56,13 @@
 
 namespace sysid {
 
+/// Where the ARMAX iterations start (other structures have one start each).
+enum class PemStart {
+  automatic,        ///< run from both starts below, keep the lower final cost
+  hannan_rissanen,  ///< high-order ARX, its residuals as noise regressors, least squares
+  output_error      ///< B, F of an OE fit with nf = min(na, nc); A = C = F (zero-padded)
+};
+
 struct PemOptions {
   int na = 0;           ///< A order (ARMA/ARMAX)
   std::vector<int> nb;  ///< per input (one per input of the data)
@@ -59,15 +72,22 @@ struct PemOptions {
   int nd = 0;           ///< D order
   Eigen::Index output = 0;  ///< which output column the model explains
   int max_iterations = 100;
-  /// Converged when the relative cost decrease of an accepted step is below this.
+  /// Converged when the full Gauss-Newton step is shorter than this many
+  /// standard deviations of the parameter estimate (Mahalanobis length
+  /// ||Q^T eps|| / sigma): the data cannot tell the next iterate from this one.
+  /// 0 disables the test (then only the tolerances below apply).
+  double step_significance_tolerance = 0.1;
+  /// ... or when the relative cost decrease of an accepted step is below this.
   double function_tolerance = 1e-10;
   /// ... or when max |J^T eps| <= gradient_tolerance * (1 + V).
   double gradient_tolerance = 1e-10;
   /// ... or when ||step|| <= parameter_tolerance * (||theta|| + parameter_tolerance).
-  double parameter_tolerance = 1e-10;
+  double parameter_tolerance = 0;
   /// High-order ARX of the Hannan-Rissanen start; 0 = min(max(3 max(na, nb, nc), 20), N / 20).
   int initial_arx_order = 0;
   int steiglitz_mcbride_iterations = 5;  ///< OE start refinement passes
+  /// ARMAX only (na, nc and some nb > 0): which start(s) to iterate from.
+  PemStart start = PemStart::automatic;
   bool remove_means = true;
 };
 
@@ -83,6 +103,8 @@ struct PemResult {
   Eigen::VectorXd input_offset, output_offset;
   double condition = 0;  ///< of the column-scaled Jacobian at the solution
   std::string structure;  ///< "armax", "arma", "oe", ... (structure_name)
+  /// ARMAX/ARMA: the start the returned model was iterated from ("hannan-rissanen" or "output-error").
+  std::string start;
   std::vector<std::string> warnings;
 };
 
@@ -109,5 +131,10 @@ PredictionErrors prediction_errors(const PolynomialModel& model, const Eigen::Ma
 Eigen::VectorXcd polynomial_roots(const Eigen::VectorXd& monic);
 /// The same polynomial with every root outside the unit circle reflected to 1/conj(z) (spectral factor).
 Eigen::VectorXd reflect_into_unit_circle(const Eigen::VectorXd& monic);
+
+namespace detail {
+/// [1, p_1..p_n] of prod_k (1 - z_k q^-1); the roots must come in conjugate pairs.
+Eigen::VectorXd monic_from_roots(const Eigen::VectorXcd& roots);
+}  // namespace detail
 
 }  // namespace sysid
