@@ -6,6 +6,8 @@
 #include <sysid/io/atomic_file.hpp>
 #include <sysid/io/polynomial_model_file.hpp>
 #include <sysid/pem/arx.hpp>
+#include <sysid/pem/order_search.hpp>
+#include <sysid/pem/polynomial_fit.hpp>
 #include <sysid/pem/prediction_error.hpp>
 #include <sysid/validate/compare.hpp>
 
@@ -22,26 +24,15 @@ namespace sysid::cli {
 
 namespace {
 
-enum class Structure { arx, ar, armax, arma, oe };
-
-const char* name_of(Structure s) {
-  switch (s) {
-    case Structure::arx: return "arx";
-    case Structure::ar: return "ar";
-    case Structure::armax: return "armax";
-    case Structure::arma: return "arma";
-    case Structure::oe: return "oe";
-  }
-  return "?";
-}
-
-bool has_inputs(Structure s) { return s == Structure::arx || s == Structure::armax || s == Structure::oe; }
+using Structure = PolynomialStructure;
+const char* name_of(Structure s) { return to_string(s); }
 
 struct PolynomialArgs {
   std::string log_path;
   LogArgs log;
-  int na = 0, nc = 0;
+  std::string na = "0", nc = "0";
   std::string nb = "1", nf = "1", nk = "1";
+  std::string select;
   std::string ar_method = "ls";
   int max_iterations = PemOptions{}.max_iterations;
   bool write_unconverged = false;
@@ -50,24 +41,45 @@ struct PolynomialArgs {
   std::string out;
 };
 
-/// "4" (every input) or "4,2,..." (one per input) -> one order per input, each >= minimum.
-/// Bad orders are bad input (exit 2, std::invalid_argument), as the library reports them.
-std::vector<int> per_input_orders(const std::string& text, Eigen::Index inputs, const std::string& option, int minimum) {
-  std::vector<int> values;
-  for (const std::string& item : split_names(text, option)) {
-    if (item.empty() || item.size() > 6 || item.find_first_not_of("-0123456789") != std::string::npos)
-      throw std::invalid_argument(option + ": expected an integer or a comma-separated list of integers, found '" + item + "'");
-    const int v = std::stoi(item);
+/// "8" or "8:32" -> an order range, each end >= minimum. Bad orders are bad
+/// input (exit 2, std::invalid_argument), as the library reports them.
+OrderRange parse_order_range(const std::string& item, const std::string& option, int minimum) {
+  const auto colon = item.find(':');
+  const auto number = [&](const std::string& t) {
+    if (t.empty() || t.size() > 6 || t.find_first_not_of("-0123456789") != std::string::npos)
+      throw std::invalid_argument(option + ": expected an integer, a range lo:hi, or a comma-separated list of them, found '" + item + "'");
+    const int v = std::stoi(t);
     if (v < minimum)
       throw std::invalid_argument(option + ": expected values >= " + std::to_string(minimum) + ", found " + std::to_string(v) +
                                   (option == "--nk" ? " (a negative delay would make the model non-causal)" : ""));
-    values.push_back(v);
-  }
-  if (values.size() == 1) return std::vector<int>(static_cast<std::size_t>(inputs), values.front());
+    return v;
+  };
+  OrderRange r;
+  r.lo = number(item.substr(0, colon));
+  r.hi = colon == std::string::npos ? r.lo : number(item.substr(colon + 1));
+  if (r.hi < r.lo) throw std::invalid_argument(option + ": range '" + item + "' has hi < lo");
+  return r;
+}
+
+/// "4" / "4:8" (every input) or "4,2:3,..." (one per input) -> one range per input.
+std::vector<OrderRange> per_input_ranges(const std::string& text, Eigen::Index inputs, const std::string& option, int minimum) {
+  std::vector<OrderRange> values;
+  for (const std::string& item : split_names(text, option)) values.push_back(parse_order_range(item, option, minimum));
+  if (values.size() == 1) return std::vector<OrderRange>(static_cast<std::size_t>(inputs), values.front());
   if (static_cast<Eigen::Index>(values.size()) != inputs)
     throw std::invalid_argument(option + ": expected one value or one per input (" + std::to_string(inputs) + "), found " +
                                 std::to_string(values.size()));
   return values;
+}
+
+/// Per input fixed orders (a range is refused: delays are not searched).
+std::vector<int> per_input_orders(const std::string& text, Eigen::Index inputs, const std::string& option, int minimum) {
+  std::vector<int> out;
+  for (const OrderRange& r : per_input_ranges(text, inputs, option, minimum)) {
+    if (r.hi != r.lo) throw std::invalid_argument(option + ": expected a single value, not a range");
+    out.push_back(r.lo);
+  }
+  return out;
 }
 
 std::string format_polynomial(const Eigen::VectorXd& p) {
@@ -90,54 +102,47 @@ void run_polynomial(Structure structure, const PolynomialArgs& a) {
   const IoData& est = data.estimation;
   const Eigen::Index m = est.inputs(), l = est.outputs();
 
-  std::vector<PolynomialModel> models;
-  Eigen::VectorXd input_offset = Eigen::VectorXd::Zero(m), output_offset = Eigen::VectorXd::Zero(l);
-  std::ostringstream report;
-  std::vector<std::string> warnings;
-  bool converged = true;
-  std::string structure_label = verb;
-  if (structure == Structure::arx || structure == Structure::ar) {
-    LinearPolynomialResult r;
-    if (structure == Structure::arx) {
-      ArxOptions o;
-      o.na = a.na;
-      o.nb = per_input_orders(a.nb, m, "--nb", 0);
-      o.nk = per_input_orders(a.nk, m, "--nk", 0);
-      r = arx(est, o);
-    } else {
-      ArOptions o;
-      o.na = a.na;
-      o.method = a.ar_method == "burg" ? ArMethod::burg : a.ar_method == "yw" ? ArMethod::yule_walker : ArMethod::least_squares;
-      r = ar(est, o);
-    }
-    models = r.models;
-    if (m > 0) input_offset = r.input_offset;
-    output_offset = r.output_offset;
-    warnings = r.warnings;
-    report << verb << ": linear least squares" << (structure == Structure::ar ? " (" + a.ar_method + ")" : std::string()) << "\n";
-  } else {
-    PemOptions o;
-    o.na = structure == Structure::oe ? 0 : a.na;
-    o.nc = structure == Structure::oe ? 0 : a.nc;
-    o.nb = has_inputs(structure) ? per_input_orders(a.nb, m, "--nb", 0) : std::vector<int>{};
-    o.nk = has_inputs(structure) ? per_input_orders(a.nk, m, "--nk", 0) : std::vector<int>{};
-    if (structure == Structure::oe) o.nf = per_input_orders(a.nf, m, "--nf", 0);
-    o.max_iterations = a.max_iterations;
-    for (Eigen::Index r = 0; r < l; ++r) {
-      o.output = r;
-      const PemResult res = pem(est, o);
-      models.push_back(res.model);
-      if (m > 0) input_offset = res.input_offset;
-      output_offset(r) = res.output_offset(r);
-      structure_label = res.structure;
-      report << verb << " output '" << est.output_name(r) << "': " << res.iterations << " iterations, "
-             << (res.status == PemResult::Status::converged ? "converged" : "NOT converged") << " (" << res.termination
-             << "), cost " << fmt(res.initial_cost, 5) << " -> " << fmt(res.final_cost, 5) << ", condition "
-             << fmt(res.condition, 3) << (res.start.empty() ? "" : ", from the " + res.start + " start") << "\n";
-      if (res.status != PemResult::Status::converged) converged = false;
-      warnings.insert(warnings.end(), res.warnings.begin(), res.warnings.end());
-    }
+  // Orders: single values fit once; any range (lo < hi) searches the grid.
+  PolynomialOrderGrid grid;
+  const bool uses_a = structure != Structure::oe, uses_c = structure == Structure::armax || structure == Structure::arma;
+  grid.na = uses_a ? parse_order_range(a.na, "--na", structure == Structure::arx ? 0 : 1) : OrderRange{};
+  grid.nc = uses_c ? parse_order_range(a.nc, "--nc", 1) : OrderRange{};
+  if (has_inputs(structure)) {
+    grid.nb = per_input_ranges(a.nb, m, "--nb", 0);
+    grid.nk = per_input_orders(a.nk, m, "--nk", 0);
+    if (structure == Structure::oe) grid.nf = per_input_ranges(a.nf, m, "--nf", 0);
   }
+  OrderSearchOptions search;
+  search.fit.structure = structure;
+  search.fit.ar_method = a.ar_method == "burg" ? ArMethod::burg : a.ar_method == "yw" ? ArMethod::yule_walker : ArMethod::least_squares;
+  search.fit.max_iterations = a.max_iterations;
+  const std::vector<PolynomialOrders> combos = order_combinations(grid, structure);
+  std::ostringstream report;
+  PolynomialFit fit;
+  std::vector<std::string> warnings;
+  if (combos.size() == 1) {
+    search.fit.orders = combos.front();
+    fit = fit_polynomial(est, search.fit);
+  } else {
+    const std::string select = a.select.empty() ? (data.validation ? "fit" : "aic") : a.select;
+    search.criterion = select == "fit" ? OrderCriterion::validation_fit : select == "bic" ? OrderCriterion::bic
+                       : select == "fpe" ? OrderCriterion::fpe : OrderCriterion::aic;
+    OrderSearchResult found = search_polynomial_orders(est, data.validation ? &*data.validation : nullptr, grid, search);
+    report << verb << ": " << found.table.size() << " order combinations (fit on "
+           << (data.validation ? data.validation_label : std::string("no validation data")) << ")\n"
+           << format_order_table(found, structure);
+    warnings = found.warnings;
+    search.fit.orders = found.table[found.best].orders;
+    fit = std::move(found.best_fit);
+  }
+  const std::vector<PolynomialModel>& models = fit.models;
+  const Eigen::VectorXd input_offset = fit.input_offset.head(m), output_offset = fit.output_offset;
+  const bool converged = fit.converged;
+  warnings.insert(warnings.end(), fit.warnings.begin(), fit.warnings.end());
+  for (Eigen::Index r = 0; r < l; ++r)
+    report << verb << " output '" << est.output_name(r) << "': " << fit.method_notes[static_cast<std::size_t>(r)]
+           << (structure == Structure::ar ? " (" + a.ar_method + ")" : std::string()) << "\n";
+  const std::string structure_label = verb;
 
   ModelFile file = polynomial_model_file(models, structure_label, est.input_names, est.output_names);
   file.input_offset = input_offset;
@@ -180,13 +185,15 @@ void run_polynomial(Structure structure, const PolynomialArgs& a) {
     nlohmann::json& p = file.provenance;
     p["method"] = verb;
     p["data"] = a.log_path;
-    p["na"] = a.na;
+    const PolynomialOrders& chosen = search.fit.orders;
+    if (uses_a) p["na"] = chosen.na;
     if (has_inputs(structure)) {
-      p["nb"] = a.nb;
-      p["nk"] = a.nk;
+      p["nb"] = chosen.nb;
+      p["nk"] = chosen.nk;
     }
-    if (structure == Structure::armax || structure == Structure::arma) p["nc"] = a.nc;
-    if (structure == Structure::oe) p["nf"] = a.nf;
+    if (uses_c) p["nc"] = chosen.nc;
+    if (structure == Structure::oe) p["nf"] = chosen.nf;
+    if (combos.size() > 1) p["order_selection"] = to_string(search.criterion);
     if (data.validation) p["validation"] = data.validation_label;
     p["converged"] = converged;
     p["sysid_version"] = SYSID_VERSION_STRING;
@@ -205,16 +212,16 @@ Verb register_structure(CLI::App& app, Structure structure, const std::string& d
   spec.inputs_required = has_inputs(structure);
   add_log_options(*cmd, args->log, spec);
   if (structure != Structure::oe)
-    cmd->add_option("--na", args->na, "order of A (poles)")->required()->check(CLI::Range(structure == Structure::arx ? 0 : 1, 10000));
+    cmd->add_option("--na", args->na, "order of A (poles); a range lo:hi searches")->required();
   if (has_inputs(structure)) {
-    cmd->add_option("--nb", args->nb, "coefficients of B per input (one number for every input, or a comma-separated list)")
+    cmd->add_option("--nb", args->nb, "coefficients of B per input (one number or range lo:hi for every input, or a comma-separated list)")
         ->required();
     cmd->add_option("--nk", args->nk, "input delay in samples (one number, or one per input)")->capture_default_str();
   }
   if (structure == Structure::armax || structure == Structure::arma)
-    cmd->add_option("--nc", args->nc, "order of C (noise zeros)")->required()->check(CLI::Range(1, 10000));
+    cmd->add_option("--nc", args->nc, "order of C (noise zeros); a range lo:hi searches")->required();
   if (structure == Structure::oe)
-    cmd->add_option("--nf", args->nf, "order of F per input (one number, or one per input)")->required();
+    cmd->add_option("--nf", args->nf, "order of F per input (one number or range, or one per input)")->required();
   if (structure == Structure::ar)
     cmd->add_option("--method", args->ar_method, "ls (least squares), burg, or yw (Yule-Walker)")
         ->capture_default_str()
@@ -227,8 +234,14 @@ Verb register_structure(CLI::App& app, Structure structure, const std::string& d
                   "write the model even when the minimisation did not converge (the exit code is still 3)");
   }
   add_validation_options(*cmd, args->validate, args->split);
+  cmd->add_option("--select", args->select,
+                  "with order ranges: choose by fit (validation fit; the default with --validate/--split), aic (the default "
+                  "otherwise), bic or fpe")
+      ->check(CLI::IsMember({"fit", "aic", "bic", "fpe"}));
   cmd->add_option("--out", args->out, "model file to write (JSON, type polynomial, with its state space)");
-  cmd->footer("Prints the polynomials, the fit on estimation and validation data and the modes.\nExample:\n  " + example);
+  cmd->footer("Prints the polynomials, the fit on estimation and validation data and the modes. With order ranges\n"
+              "(--na 8:32 ...) every combination is fitted and scored by AIC, BIC, FPE and validation fit in a table;\n"
+              "the best by --select is written.\nExample:\n  " + example);
   return {cmd, [args, structure] { run_polynomial(structure, *args); }};
 }
 

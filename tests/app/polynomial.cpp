@@ -102,3 +102,25 @@ TEST(PolynomialApp, NonConvergenceExitsThreeWithoutAModel) {
   EXPECT_EQ(forced.exit_code, 3) << describe(forced);
   EXPECT_TRUE(std::filesystem::exists(out));
 }
+
+TEST(PolynomialApp, OrderRangesPrintATableAndWriteTheBest) {
+  TempDir dir;
+  const std::string log = write_armax_log(dir, "log.csv", 21), val = write_armax_log(dir, "val.csv", 22), out = dir / "best.json";
+  const CliResult r = run_cli({"arx", log, "--inputs", "u", "--outputs", "y", "--na", "1:4", "--nb", "1:3", "--nk", "1",
+                               "--validate", val, "--select", "bic", "--out", out});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_NE(r.out.find("12 order combinations"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("AIC"), std::string::npos);
+  EXPECT_NE(r.out.find("chosen by bic"), std::string::npos);
+  const ModelFile file = read_model_json(out);
+  EXPECT_EQ(file.provenance["order_selection"], "bic");
+  // An ARX needs more A and B terms than the ARMAX truth (C = 1 - 0.6 q^-1) to whiten its noise: at least the true 2 and 2.
+  EXPECT_GE(file.provenance["na"].get<int>(), 2);
+  EXPECT_GE(file.provenance["nb"][0].get<int>(), 2);
+  // A reversed range is bad input: exit 2, nothing written.
+  const std::string bad = dir / "bad.json";
+  const CliResult b = run_cli({"arx", log, "--inputs", "u", "--outputs", "y", "--na", "4:1", "--nb", "2", "--out", bad});
+  EXPECT_EQ(b.exit_code, 2) << describe(b);
+  EXPECT_NE(b.err.find("hi < lo"), std::string::npos) << b.err;
+  EXPECT_FALSE(std::filesystem::exists(bad));
+}
