@@ -28,5 +28,11 @@ Verb register_ar(CLI::App& app);
 Verb register_armax(CLI::App& app);
 Verb register_arma(CLI::App& app);
 Verb register_oe(CLI::App& app);
+Verb register_assemble(CLI::App& app);
+Verb register_hsv(CLI::App& app);
+Verb register_reduce(CLI::App& app);
+Verb register_lms(CLI::App& app);
+Verb register_okid(CLI::App& app);
+Verb register_era(CLI::App& app);
 
 }  // namespace sysid::cli

@@ -1,0 +1,160 @@
+// sysid hsv | reduce: Hankel singular values of a model, and its reduction by
+// balanced truncation, singular perturbation or modal truncation
+// (reduce/balanced_truncation.hpp, reduce/modal_truncation.hpp).
+#include <sysid/config.hpp>
+#include <sysid/io/atomic_file.hpp>
+#include <sysid/io/model_json.hpp>
+#include <sysid/reduce/balanced_truncation.hpp>
+#include <sysid/reduce/hankel_singular_values.hpp>
+#include <sysid/reduce/modal_truncation.hpp>
+
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "cli_common.hpp"
+#include "verbs.hpp"
+
+namespace sysid::cli {
+
+namespace {
+
+/// A model file's state space with its channel names (polynomial files included).
+StateSpace named_model(const ModelFile& file) {
+  StateSpace s = file.model;
+  s.input_names = model_input_names(file);
+  s.output_names = model_output_names(file);
+  return s;
+}
+
+struct HsvArgs {
+  std::string model_path;
+};
+
+void run_hsv(const HsvArgs& a) {
+  const ModelFile file = load_model(a.model_path);
+  const HankelSingularValuesResult r = hankel_singular_values(named_model(file));
+  const double total = r.values.sum();
+  std::ostringstream s;
+  s << "Hankel singular values of " << a.model_path << " (order " << file.model.order() << ", stable part "
+    << r.values.size() << " states" << (r.unstable_states > 0 ? ", " + std::to_string(r.unstable_states) + " unstable states kept whole by reduce" : "")
+    << "):\n";
+  s << "   r  " << std::setw(14) << "hsv" << std::setw(12) << "hsv/hsv1" << std::setw(16) << "ratio if cut" << std::setw(16)
+    << "H-inf bound\n";
+  double kept = 0;
+  for (Eigen::Index k = 0; k < r.values.size(); ++k) {
+    kept += r.values(k);
+    const double discarded = total - kept;
+    s << std::setw(4) << k + 1 << "  " << std::setw(14) << std::setprecision(6) << r.values(k) << std::setw(12)
+      << std::setprecision(4) << r.values(k) / r.values(0) << std::setw(16) << std::setprecision(4)
+      << (total > 0 ? std::max(0.0, discarded) / total : 0.0) << std::setw(16) << std::setprecision(4) << 2.0 * std::max(0.0, discarded)
+      << "\n";
+  }
+  s << "(ratio if cut: (sum of all HSV - sum of the first r) / sum of all, the isolator paper's figure; "
+       "H-inf bound: 2 x sum of the discarded HSV)\n";
+  std::cout << s.str();
+  for (const auto& w : r.warnings) warn("hsv", w);
+}
+
+struct ReduceArgs {
+  std::string model_path;
+  Eigen::Index order = -1;
+  std::string max_error;
+  std::string band;
+  std::string method = "balanced";
+  bool keep_dc = false;
+  std::string out;
+};
+
+/// "2%" -> 0.02, "0.02" -> 0.02.
+double parse_ratio(const std::string& text) {
+  std::string t = text;
+  double scale = 1.0;
+  if (!t.empty() && t.back() == '%') {
+    t.pop_back();
+    scale = 0.01;
+  }
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(t, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != t.size() || t.empty() || !(v > 0) || v * scale >= 1.0)
+    throw std::invalid_argument("--max-error: expected a ratio in (0, 1) such as 0.02 or 2%, found '" + text + "'");
+  return v * scale;
+}
+
+void run_reduce(const ReduceArgs& a) {
+  refuse_to_overwrite_input(a.out, {a.model_path});
+  const int chosen = (a.order >= 0) + !a.max_error.empty() + !a.band.empty();
+  if (chosen != 1) throw std::invalid_argument("reduce: give exactly one of --order, --max-error, --band");
+  ModelFile file = load_model(a.model_path);
+  const StateSpace sys = named_model(file);
+  ReductionResult r;
+  if (!a.band.empty() || a.method == "modal") {
+    ModalTruncationOptions o;
+    if (!a.band.empty()) std::tie(o.f_lo_hz, o.f_hi_hz) = parse_range(a.band, "--band");
+    if (a.order >= 0) o.order = a.order;
+    if (!a.max_error.empty()) throw std::invalid_argument("reduce: --max-error needs a balanced method (--method balanced or spa)");
+    o.keep_dc_gain = a.keep_dc;
+    r = modal_truncation(sys, o);
+  } else {
+    BalancedTruncationOptions o;
+    o.order = a.order;
+    if (!a.max_error.empty()) o.max_error_ratio = parse_ratio(a.max_error);
+    o.method = a.method == "spa" ? BalancedMethod::singular_perturbation : BalancedMethod::truncation;
+    r = balanced_truncation(sys, o);
+  }
+  std::cout << r.brief_report();
+  if (!r.kept_modes.empty()) std::cout << "kept modes:\n" << format_modal_table(r.kept_modes);
+  ModelFile out;
+  out.model = r.model;
+  out.input_offset = file.input_offset;
+  out.output_offset = file.output_offset;
+  out.provenance["method"] = "reduce";
+  out.provenance["reduction"] = r.method;
+  out.provenance["source"] = a.model_path;
+  out.provenance["original_order"] = r.original_order;
+  out.provenance["order"] = r.order;
+  if (!std::isnan(r.error_ratio)) out.provenance["hsv_ratio"] = r.error_ratio;
+  if (!std::isnan(r.hinf_bound)) out.provenance["hinf_bound"] = r.hinf_bound;
+  if (!std::isnan(r.hinf_error)) out.provenance["hinf_error"] = r.hinf_error;
+  out.provenance["sysid_version"] = SYSID_VERSION_STRING;
+  write_model_json(a.out, out);
+  note("reduce", "wrote " + a.out);
+}
+
+}  // namespace
+
+Verb register_hsv(CLI::App& app) {
+  auto args = std::make_shared<HsvArgs>();
+  CLI::App* cmd = app.add_subcommand("hsv", "Hankel singular values of a model, with the reduction error of every cut");
+  cmd->add_option("model", args->model_path, "model file (JSON)")->required();
+  cmd->footer("Example:\n  sysid hsv avi112.json");
+  return {cmd, [args] { run_hsv(*args); }};
+}
+
+Verb register_reduce(CLI::App& app) {
+  auto args = std::make_shared<ReduceArgs>();
+  CLI::App* cmd = app.add_subcommand("reduce", "reduce a model: balanced truncation, singular perturbation or modal truncation");
+  cmd->add_option("model", args->model_path, "model file (JSON)")->required();
+  cmd->add_option("--order", args->order, "order of the reduced model (unstable states included)")->check(CLI::Range(0, 100000));
+  cmd->add_option("--max-error", args->max_error,
+                  "smallest order whose discarded-HSV ratio (sum discarded / sum all) is at most this, e.g. 2% or 0.02");
+  cmd->add_option("--band", args->band, "modal truncation: keep the modes with natural frequency in lo:hi Hz")->check(range_validator());
+  cmd->add_option("--method", args->method, "balanced (square-root balanced truncation), spa (singular perturbation: keeps the DC gain) or modal")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"balanced", "spa", "modal"}));
+  cmd->add_flag("--keep-dc", args->keep_dc, "modal truncation: add the removed modes' static gain to D");
+  cmd->add_option("--out", args->out, "reduced model file to write (JSON)")->required();
+  cmd->footer(
+      "Prints the order, the discarded-HSV ratio, the H-inf bound 2 x sum(discarded HSV) and the H-inf error measured on a dense grid.\n"
+      "Examples:\n  sysid reduce avi112.json --max-error 2% --out avi_r.json\n"
+      "  sysid reduce ar16.json --band 20:40 --method modal --keep-dc --out ar4.json");
+  return {cmd, [args] { run_reduce(*args); }};
+}
+
+}  // namespace sysid::cli
