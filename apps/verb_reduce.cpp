@@ -92,7 +92,19 @@ void run_reduce(const ReduceArgs& a) {
   const int chosen = (a.order >= 0) + !a.max_error.empty() + !a.band.empty();
   if (chosen != 1) throw std::invalid_argument("reduce: give exactly one of --order, --max-error, --band");
   ModelFile file = load_model(a.model_path);
-  const StateSpace sys = named_model(file);
+  StateSpace sys = named_model(file);
+  // A time-series model (AR, ARMA: no inputs) is all noise model: reduce its
+  // innovation form y = C (zI - A)^-1 K e + e, the spectral factor whose
+  // modes shape the output spectrum.
+  const bool time_series = sys.inputs() == 0;
+  if (time_series) {
+    if (file.K.size() == 0)
+      throw std::invalid_argument("reduce: " + a.model_path + " has no inputs and no noise gain K: nothing to reduce");
+    sys.B = file.K;
+    sys.D = Eigen::MatrixXd::Identity(sys.outputs(), sys.outputs());
+    sys.input_names.clear();
+    for (Eigen::Index i = 0; i < sys.outputs(); ++i) sys.input_names.push_back("e_" + sys.output_name(i));
+  }
   ReductionResult r;
   if (!a.band.empty() || a.method == "modal") {
     ModalTruncationOptions o;
@@ -108,10 +120,22 @@ void run_reduce(const ReduceArgs& a) {
     o.method = a.method == "spa" ? BalancedMethod::singular_perturbation : BalancedMethod::truncation;
     r = balanced_truncation(sys, o);
   }
+  if (time_series) std::cout << "time-series model: reducing its innovation form (input = the innovation e)\n";
   std::cout << r.brief_report();
   if (!r.kept_modes.empty()) std::cout << "kept modes:\n" << format_modal_table(r.kept_modes);
   ModelFile out;
   out.model = r.model;
+  if (time_series) {
+    out.K = r.model.B;
+    out.model.B = Eigen::MatrixXd::Zero(r.model.order(), 0);
+    out.model.D = Eigen::MatrixXd::Zero(r.model.outputs(), 0);
+    out.model.input_names.clear();
+    out.noise_covariance = file.noise_covariance;
+  } else if (file.K.rows() == file.model.order() && !a.band.empty()) {
+    // Modal truncation keeps the modes' coordinates only up to a basis change:
+    // K cannot follow; the reduced model is deterministic.
+    warn("reduce", "the noise gain K is not carried over to the reduced model");
+  }
   out.input_offset = file.input_offset;
   out.output_offset = file.output_offset;
   out.provenance["method"] = "reduce";
