@@ -34,5 +34,6 @@ Verb register_reduce(CLI::App& app);
 Verb register_lms(CLI::App& app);
 Verb register_okid(CLI::App& app);
 Verb register_era(CLI::App& app);
+Verb register_diagnose(CLI::App& app);
 
 }  // namespace sysid::cli

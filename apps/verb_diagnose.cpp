@@ -1,0 +1,141 @@
+// sysid diagnose: where a simulation model and a recording disagree, which
+// physics the simulation left out, the augmented model, and the held-out proof.
+#include <sysid/diagnose/diagnose.hpp>
+#include <sysid/io/atomic_file.hpp>
+#include <sysid/io/augmented_model_file.hpp>
+#include <sysid/validate/fit.hpp>
+
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "cli_common.hpp"
+#include "verbs.hpp"
+
+namespace sysid::cli {
+
+namespace {
+
+struct DiagnoseArgs {
+  std::string model_path, log_path, json_path, out, validate;
+  LogArgs log;
+  int max_findings = 4;
+  double significance = 0.01;
+  int substeps = 4;
+};
+
+std::string describe_finding(std::size_t rank, const Finding& f) {
+  std::ostringstream s;
+  s << "  " << rank << ". " << f.candidate.block.kind << ": " << f.summary << "\n"
+    << "     validation fit " << fmt(f.fit_before, 4) << " -> " << fmt(f.fit_after, 4) << " %; selection gain "
+    << fmt(f.selection_gain, 3) << " points (t = " << fmt(f.t_statistic, 3) << ")\n";
+  return s.str();
+}
+
+void run_diagnose(const DiagnoseArgs& a) {
+  const std::string verb = "diagnose";
+  std::vector<std::string> sources{a.model_path, a.log_path};
+  if (!a.validate.empty()) sources.push_back(a.validate);
+  if (!a.json_path.empty()) refuse_to_overwrite_input(a.json_path, sources);
+  if (!a.out.empty()) refuse_to_overwrite_input(a.out, sources);
+  if (!a.json_path.empty() && a.json_path == a.out)
+    throw CLI::ValidationError("--json", "the report and the augmented model cannot be the same file");
+
+  const ModelFile file = load_model(a.model_path, /*allow_augmented=*/true);
+  const auto [inputs, outputs] = model_channels(a.log, file, true);
+  const LoadedLog log = load_log(a.log_path, make_log_options(a.log, inputs, outputs));
+  AugmentedModel nominal = augmented_model_from_file(file, a.model_path);
+  nominal.nominal = model_for_sample_time(file, log.data.Ts, a.model_path, verb);
+  const Experiment& e = log.data.experiments.front();
+
+  DiagnoseOptions o;
+  o.max_findings = a.max_findings;
+  o.significance = a.significance;
+  o.detection.feedback_substeps = a.substeps;
+  DiagnoseReport report;
+  try {
+    report = diagnose(nominal, e.u, e.y, o);
+  } catch (const std::invalid_argument& ex) {
+    throw DataError(a.log_path, 0, 0, ex.what());  // too short a record, channel mismatch
+  }
+  nlohmann::json j = diagnose_report_to_json(report, log.data.Ts);
+  j["data"] = a.log_path;
+  j["nominal"] = a.model_path;
+
+  // An independent recording, when given, is the validation the report leads with.
+  if (!a.validate.empty()) {
+    const LoadedLog other = load_log(a.validate, make_log_options(a.log, inputs, outputs));
+    if (std::abs(other.data.Ts - log.data.Ts) > 1e-6 * log.data.Ts)
+      throw DataError(a.validate, 0, 0, "sample time differs from " + a.log_path + "'s");
+    const Experiment& v = other.data.experiments.front();
+    AugmentedModel plain = report.augmented;
+    plain.blocks = nominal.blocks;
+    const Eigen::VectorXd before = fit_percent(v.y, simulate_augmented(plain, v.u));
+    const Eigen::VectorXd after = fit_percent(v.y, simulate_augmented(report.augmented, v.u));
+    j["held_out_segment"] = {{"validation", report.validation}, {"fit_before", report.fit_before}, {"fit_after", report.fit_after}};
+    j["validation"] = a.validate;
+    j["fit_before"] = before.mean();
+    j["fit_after"] = after.mean();
+  }
+
+  std::ostringstream s;
+  s << "diagnose " << a.model_path << " against " << a.log_path << " (" << e.samples() << " samples)\n";
+  s << "mismatch tests on the estimation part: "
+    << (report.location.any_mismatch ? "mismatch (" + join(report.location.fired) + ")" : "no significant mismatch") << "\n";
+  s << "validation (" << j["validation"].get<std::string>() << "): fit " << fmt(j["fit_before"].get<double>(), 4) << " -> "
+    << fmt(j["fit_after"].get<double>(), 4) << " %\n";
+  if (report.findings.empty()) s << "findings: none — the simulation is consistent with the recording\n";
+  else s << "findings (most important first):\n";
+  for (std::size_t k = 0; k < report.findings.size(); ++k) s << describe_finding(k + 1, report.findings[k]);
+  for (const auto& w : report.warnings) warn(verb, w);
+  std::cout << s.str();
+
+  if (!a.json_path.empty()) {
+    write_file_atomically(a.json_path, j.dump(2) + "\n");
+    note(verb, "wrote the report to " + a.json_path);
+  }
+  if (!a.out.empty()) {
+    nlohmann::json provenance = {{"method", "diagnose"}, {"nominal", a.model_path}, {"data", a.log_path},
+                                 {"fit_percent", report.fit_after}, {"validation", report.validation}};
+    write_model_json(a.out, augmented_model_to_file(report.augmented, provenance));
+    note(verb, "wrote the " + std::string(report.findings.empty() ? "(unchanged) nominal" : "augmented") + " model to " + a.out);
+  }
+}
+
+}  // namespace
+
+Verb register_diagnose(CLI::App& app) {
+  auto args = std::make_shared<DiagnoseArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "diagnose", "Find where a simulation model and a recording disagree, name the missing physics, model it");
+  cmd->add_option("--model", args->model_path, "the simulation (nominal) model: state-space, polynomial or augmented JSON")
+      ->required();
+  cmd->add_option("log", args->log_path, "CSV log recorded on the real machine")->required();
+  LogOptionSpec spec;
+  spec.inputs_required = false;
+  spec.outputs_required = false;
+  spec.inputs_help = "input columns, in the model's input order (default: the model's input names)";
+  spec.outputs_help = "output columns, in the model's output order (default: the model's output names)";
+  add_log_options(*cmd, args->log, spec);
+  cmd->add_option("--json", args->json_path, "write the report (DESIGN.md report contract) to this JSON file");
+  cmd->add_option("--out", args->out, "write the augmented model (\"type\": \"augmented\") to this JSON file");
+  cmd->add_option("--validate", args->validate, "an independent recording (same columns) to report the fit on");
+  cmd->add_option("--max-findings", args->max_findings, "at most this many effects are added")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 13));
+  cmd->add_option("--significance", args->significance, "level of the acceptance test per round (Bonferroni over the candidates)")
+      ->capture_default_str()
+      ->check(CLI::Range(1e-9, 0.5));
+  cmd->add_option("--substeps", args->substeps, "simulation steps per sample for forces inside the plant")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 64));
+  cmd->footer(
+      "The record is split in time: the first 50 % fits the candidate physics, the next 20 %\n"
+      "ranks and accepts them (a paired test on the simulation errors), the last 30 % is\n"
+      "held out from every fit and gives fit_before / fit_after.\n"
+      "Example:\n"
+      "  sysid diagnose --model nominal.json log.csv --inputs u --outputs y --json report.json --out augmented.json");
+  return {cmd, [args] { run_diagnose(*args); }};
+}
+
+}  // namespace sysid::cli

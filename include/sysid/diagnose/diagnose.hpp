@@ -1,0 +1,105 @@
+#pragma once
+/// @file
+/// Purpose: `sysid diagnose` as a library call — locate where a nominal
+/// simulation model and a recording disagree, name the physics the simulation
+/// left out, fit it, and prove the fit improves on samples held out from every
+/// fit (issue 6; report contract in DESIGN.md "diagnose: the report contract").
+///
+/// Method. The record is cut in three, in time order:
+///   [0, fit)          detection and parameter fitting (first 50 % by default),
+///   [fit, estimation) selection: ranks and accepts candidates (next 20 %),
+///   [estimation, N)   validation: fit_before / fit_after only (last 30 %).
+///  1. Locate: the nominal's simulation residual on the estimation part goes
+///     through locate_mismatch (model-error FRF bands, incoherent residual peaks,
+///     windows, amplitude / reversal / position dependence).
+///  2. Name: propose_candidates scores every kind of physics on the residual.
+///  3. Model: the best-scoring candidates are fitted (fit_candidates: DIRECT-L then
+///     BOBYQA) on [0, fit); each is judged on the selection segment by a paired
+///     test on the squared simulation errors before and after it: the reduction
+///     of the sum of squares, standardised by its spread under "the change only
+///     fits noise" (computed from the noise autocovariance, so coloured residuals
+///     are accounted for; see improvement_z in diagnose.cpp), must exceed the
+///     Bonferroni-corrected normal quantile for the number of candidates tried
+///     (in the spirit of Diebold and Mariano, J. Bus. Econ. Stat. 13 (1995)). Among the significant
+///     ones the largest selection gain, penalised per parameter, is accepted; all
+///     accepted blocks are refitted together and the next round starts from the
+///     augmented model's residual, until no candidate passes.
+///  4. Prove: the accepted blocks are refitted (locally) on [0, estimation) and
+///     fit_before / fit_after are measured on the validation segment, per finding
+///     in the order found.
+/// A correct nominal model yields no findings unless a test fires by chance
+/// (probability about `significance` per round).
+#include <Eigen/Dense>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "sysid/diagnose/augmented_model.hpp"
+#include "sysid/diagnose/candidate_fit.hpp"
+#include "sysid/diagnose/hypotheses.hpp"
+#include "sysid/diagnose/mismatch_location.hpp"
+
+namespace sysid {
+
+struct DiagnoseOptions {
+  double fit_fraction = 0.5;         ///< first part: detection and fitting
+  double selection_fraction = 0.2;   ///< next part: ranking and acceptance; the rest validates
+  int max_findings = 4;              ///< rounds of add-the-best
+  int candidates_per_round = 8;      ///< fit this many best-scoring candidates per round
+  double significance = 0.01;        ///< per round, shared by the candidates tried (Bonferroni)
+  Eigen::Index max_correlation_lag = 500;  ///< lags of the noise autocovariance in the acceptance test
+  double min_gain_points = 0.05;     ///< minimum penalised gain on the selection segment, fit points
+  double penalty_points_per_parameter = 0.02;  ///< penalty per free parameter, fit points
+  DetectionOptions detection;
+  CandidateFitOptions fit;
+  MismatchLocationOptions location;
+};
+
+/// A candidate after fitting, with its judgement on the selection segment.
+struct JudgedCandidate {
+  Candidate candidate;         ///< fitted parameters
+  double selection_gain = 0;   ///< fit points gained on the selection segment (mean over outputs)
+  double t_statistic = 0;      ///< standardised held-out SSE reduction (z)
+  double t_threshold = 0;      ///< what it had to exceed
+  bool significant = false;
+  int round = 0;
+};
+
+struct Finding {
+  Candidate candidate;  ///< the block with its final parameters, the detector's evidence
+  double fit_before = 0, fit_after = 0;  ///< validation fit (mean over outputs, %) without / with it
+  double selection_gain = 0, t_statistic = 0;
+  std::optional<std::pair<double, double>> band_hz;          ///< where in frequency, when it has a place there
+  std::vector<std::pair<double, double>> time_windows_s;     ///< flagged residual windows it explains, if any
+  std::string summary;  ///< one sentence in plain engineering words
+};
+
+struct DiagnoseReport {
+  double fit_before = 0, fit_after = 0;           ///< validation fit, mean over outputs (%)
+  Eigen::VectorXd fit_before_per_output, fit_after_per_output;
+  std::string validation;                          ///< e.g. "last 30 % of samples (6000 of 20000)"
+  Eigen::Index fit_rows = 0, estimation_rows = 0;  ///< the segment boundaries used
+  std::vector<Finding> findings;                   ///< ranked, most important first; empty = no significant mismatch
+  std::vector<JudgedCandidate> considered;         ///< every candidate fitted, all rounds
+  MismatchLocation location;                       ///< the nominal's mismatch on the estimation part
+  AugmentedModel augmented;                        ///< the nominal with the findings' blocks
+  Eigen::MatrixXd simulated_before, simulated_after;  ///< whole record, raw coordinates (for plots)
+  std::vector<std::string> warnings;
+};
+
+/// Runs the whole loop. `nominal` carries the nominal state-space model (its
+/// blocks, if any, are kept as accepted), u and y are the raw log (N x m, N x l),
+/// in the nominal's channel order.
+/// Preconditions (std::invalid_argument): sizes agree with the nominal, values
+/// finite, fractions in (0, 1) with fit + selection < 1, at least 200 samples in
+/// every segment.
+DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Eigen::MatrixXd>& u,
+                        const Eigen::Ref<const Eigen::MatrixXd>& y, const DiagnoseOptions& options = {});
+
+/// A sentence describing a fitted block, e.g. "The recordings contain a lightly
+/// damped mode at 31.6 Hz (damping 0.012) that the simulation lacks."
+std::string finding_summary(const PhysicsBlock& block, const std::vector<std::string>& input_names,
+                            const std::vector<std::string>& output_names);
+
+}  // namespace sysid

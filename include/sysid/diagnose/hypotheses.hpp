@@ -1,0 +1,53 @@
+#pragma once
+/// @file
+/// Purpose: the detectors of `sysid diagnose` (issue 6, scope 2): for every kind
+/// of physics in physics_block.hpp, a detector that scores how much of the
+/// current simulation residual the effect could explain and proposes start values
+/// and bounds for the fit.
+///
+/// Method: most effects vanish at a known parameter value p0 (zero friction, zero
+/// delay, unit gain); near p0 the augmented output is linear in p - p0, so the
+/// sensitivity g = (sim(p0 + delta) - sim(p0)) / delta, computed by simulation,
+/// is the effect's signature. Least squares of the residual r on g gives the start
+/// p0 + <g, r>/<g, g> and the score <g, r>^2 / (<g, g> <r, r>): the fraction of
+/// the residual energy the linearised effect explains (a Gauss-Newton step from
+/// the nominal model, Ljung, System Identification, 2nd ed., sec. 10.2). Effects
+/// that are not smooth at p0 (saturation, hysteresis) or that have a frequency
+/// to find (missing mode, periodic disturbance) are scored on a small grid of
+/// their nonlinear parameters, the frequencies taken from the mismatch location
+/// (model-error bands and residual peaks).
+/// Outputs are weighted by 1/std(y_i) so channels count alike.
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+#include "sysid/diagnose/augmented_model.hpp"
+#include "sysid/diagnose/candidate_fit.hpp"
+
+namespace sysid {
+
+struct DetectionOptions {
+  int feedback_substeps = 4;        ///< simulation steps per sample for forces inside the plant
+  double friction_velocity_fraction = 0.005;  ///< friction's tanh velocity scale, as a fraction of the velocity RMS
+  double max_delay_samples = 8.0;   ///< upper bound of time_delay
+};
+
+/// What the detectors look at. Rows [0, rows) of u, y (deviation coordinates) are
+/// the detection and fitting data; `current` is the present model's simulation on them.
+struct DetectionData {
+  const AugmentedSimulator* simulator = nullptr;  ///< substeps >= feedback_substeps when the plant has feedback candidates
+  std::vector<PhysicsBlock> accepted;             ///< blocks already in the model
+  Eigen::MatrixXd u, y;                           ///< rows x m, rows x l
+  Eigen::MatrixXd current;                        ///< rows x l
+  double Ts = 0.0;
+  std::vector<double> mode_frequencies_hz;        ///< where the model-error FRF is significant (peaks of falsified bands)
+  std::vector<double> peak_frequencies_hz;        ///< residual peaks not coherent with any input
+  double frequency_resolution_hz = 0.0;           ///< bin width of the spectra the frequencies came from
+};
+
+/// One candidate per kind and channel (and per frequency for modes and
+/// periodic disturbances), sorted by detector_score, highest first.
+/// Kinds that do not apply (cross_coupling on a SISO model) are not proposed.
+std::vector<Candidate> propose_candidates(const DetectionData& data, const DetectionOptions& options = {});
+
+}  // namespace sysid

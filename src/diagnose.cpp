@@ -1,0 +1,304 @@
+// The diagnose loop: locate, name, model, prove. Method in
+// include/sysid/diagnose/diagnose.hpp.
+#include "sysid/diagnose/diagnose.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "sysid/spectral/confidence.hpp"
+#include "sysid/validate/fit.hpp"
+
+namespace sysid {
+
+namespace {
+
+double mean_fit(const Eigen::Ref<const Eigen::MatrixXd>& y, const Eigen::Ref<const Eigen::MatrixXd>& y_hat) {
+  return fit_percent(y, y_hat).mean();
+}
+
+/// Paired test of "the candidate does not improve the simulation" on rows
+/// [from, to): the SSE reduction D = sum_t (e_before^2 - e_after^2) against its
+/// spread under the null. With delta = y_after - y_before (fitted on other
+/// samples, so independent of the noise here) and the null e_before = n,
+/// D = 2 sum delta n - sum delta^2, whose standard deviation is
+/// 2 sqrt(sum_{t,s} delta_t delta_s R_n(t - s)) — the exact variance of a linear
+/// functional of a stationary Gaussian noise. R_n is estimated from e_after
+/// (Bartlett-tapered up to `max_lag`, so the estimate stays non-negative
+/// definite). Outputs are weighted by 1 / var(y_i) and taken as independent.
+/// Returns D / sd: about N(-||delta|| / (2 sigma), 1) or below under the null.
+double improvement_z(const Eigen::MatrixXd& y, const Eigen::MatrixXd& before, const Eigen::MatrixXd& after, Eigen::Index from,
+                     Eigen::Index to, Eigen::Index max_lag) {
+  const Eigen::Index n = to - from;
+  const Eigen::Index L = std::min(max_lag, n / 4);
+  double gain = 0.0, variance = 0.0;
+  for (Eigen::Index i = 0; i < y.cols(); ++i) {
+    const auto yi = y.col(i).segment(from, n);
+    const double w = 1.0 / std::max((yi.array() - yi.mean()).square().mean(), std::numeric_limits<double>::min());
+    const Eigen::VectorXd e_before = yi - before.col(i).segment(from, n), e_after = yi - after.col(i).segment(from, n);
+    const Eigen::VectorXd delta = e_before - e_after;
+    const Eigen::VectorXd noise = e_after.array() - e_after.mean();
+    gain += w * (e_before.squaredNorm() - e_after.squaredNorm());
+    double v = 0.0;
+    for (Eigen::Index k = 0; k <= L; ++k) {
+      const double r = noise.head(n - k).dot(noise.tail(n - k)) / static_cast<double>(n);
+      const double c = delta.head(n - k).dot(delta.tail(n - k));
+      const double taper = 1.0 - static_cast<double>(k) / static_cast<double>(L + 1);
+      v += (k == 0 ? 1.0 : 2.0) * taper * r * c;
+    }
+    variance += w * w * 4.0 * std::max(v, 0.0);
+  }
+  if (!(variance > 0)) return gain > 0 ? std::numeric_limits<double>::infinity() : 0.0;
+  return gain / std::sqrt(variance);
+}
+
+std::string fixed(double v, int digits) {
+  std::ostringstream s;
+  s.precision(digits);
+  s << v;
+  return s.str();
+}
+
+std::string channel_name(const std::vector<std::string>& names, long k, const char* prefix) {
+  return k < static_cast<long>(names.size()) ? names[k] : prefix + std::to_string(k + 1);
+}
+
+struct Segments {
+  Eigen::Index fit = 0, estimation = 0, total = 0;
+};
+
+void check_arguments(const AugmentedModel& nominal, const Eigen::Ref<const Eigen::MatrixXd>& u,
+                     const Eigen::Ref<const Eigen::MatrixXd>& y, const DiagnoseOptions& o, Segments& s) {
+  nominal.nominal.validate();
+  if (!nominal.nominal.is_discrete()) throw std::invalid_argument("diagnose: need a discrete nominal model");
+  if (u.rows() != y.rows()) throw std::invalid_argument("diagnose: need u.rows() == y.rows()");
+  if (u.cols() != nominal.nominal.inputs() || y.cols() != nominal.nominal.outputs())
+    throw std::invalid_argument("diagnose: the log's channels must match the nominal model's inputs and outputs");
+  if (!u.allFinite() || !y.allFinite()) throw std::invalid_argument("diagnose: u and y must be finite");
+  if (!(o.fit_fraction > 0 && o.selection_fraction > 0 && o.fit_fraction + o.selection_fraction < 1))
+    throw std::invalid_argument("diagnose: need fit_fraction, selection_fraction > 0 and their sum < 1");
+  if (o.max_correlation_lag < 1) throw std::invalid_argument("diagnose: need max_correlation_lag >= 1");
+  s.total = y.rows();
+  s.fit = static_cast<Eigen::Index>(std::floor(o.fit_fraction * static_cast<double>(s.total)));
+  s.estimation = static_cast<Eigen::Index>(std::floor((o.fit_fraction + o.selection_fraction) * static_cast<double>(s.total)));
+  const Eigen::Index shortest = std::min({s.fit, s.estimation - s.fit, s.total - s.estimation});
+  if (shortest < 200)
+    throw std::invalid_argument("diagnose: need at least 200 samples in each of the fit, selection and validation segments (have " +
+                                std::to_string(shortest) + " in the shortest; record has " + std::to_string(s.total) + ")");
+}
+
+/// The falsified band or residual peak a block explains, for the report's location.
+std::optional<std::pair<double, double>> band_of(const PhysicsBlock& b, const MismatchLocation& loc) {
+  if (b.kind != "missing_mode" && b.kind != "periodic_disturbance") return std::nullopt;
+  const double f = b.param("freq_hz");
+  if (b.output < static_cast<long>(loc.outputs.size()))
+    for (const auto& band : loc.outputs[b.output].bands)
+      if (band.lo_hz <= f * 1.02 && f <= band.hi_hz * 1.02) return std::make_pair(band.lo_hz, band.hi_hz);
+  const double halfwidth = b.kind == "missing_mode" ? std::max(3.0 * b.param("damping") * f, 0.5) : 0.5;
+  return std::make_pair(f - halfwidth, f + halfwidth);
+}
+
+std::vector<std::pair<double, double>> flagged_windows(const PhysicsBlock& b, const MismatchLocation& loc) {
+  std::vector<std::pair<double, double>> out;
+  if (b.output >= static_cast<long>(loc.outputs.size())) return out;
+  for (const auto& w : loc.outputs[b.output].windows)
+    if (w.flagged) out.emplace_back(w.t0_s, w.t1_s);
+  return out;
+}
+
+}  // namespace
+
+std::string finding_summary(const PhysicsBlock& b, const std::vector<std::string>& input_names,
+                            const std::vector<std::string>& output_names) {
+  const std::string in = channel_name(input_names, b.input, "u"), out = channel_name(output_names, b.output, "y");
+  const std::string k = b.kind;
+  if (k == "missing_mode")
+    return "The recordings contain a lightly damped mode at " + fixed(b.param("freq_hz"), 4) + " Hz (damping " +
+           fixed(b.param("damping"), 2) + ") in the path " + in + " -> " + out + " that the simulation lacks.";
+  if (k == "time_delay")
+    return "The response to " + in + " arrives " + fixed(b.param("delay_s") * 1e3, 3) +
+           " ms later than the simulation predicts (a transport or computation delay).";
+  if (k == "gain_error")
+    return "The measured " + out + " is " + fixed(b.param("ratio"), 4) + " times the simulated one (a gain or calibration error).";
+  if (k == "input_lag")
+    return "The actuation of " + in + " lags like a first-order low-pass with a corner at " + fixed(b.param("corner_hz"), 4) +
+           " Hz that the simulation lacks.";
+  if (k == "coulomb_friction")
+    return "A Coulomb friction force of " + fixed(b.param("level"), 3) + " (input units) opposes the motion at " + out +
+           "; it shows near velocity reversals.";
+  if (k == "backlash")
+    return "The actuation of " + in + " has play (backlash) of total width " + fixed(b.param("width"), 3) + " (input units).";
+  if (k == "deadzone")
+    return "The actuation of " + in + " has a dead zone of total width " + fixed(b.param("width"), 3) + " (input units).";
+  if (k == "saturation")
+    return "The actuation of " + in + " saturates at +-" + fixed(b.param("limit"), 4) + " (input units).";
+  if (k == "cubic_stiffness")
+    return std::string(b.param("coefficient") >= 0 ? "A hardening" : "A softening") + " cubic stiffness of " +
+           fixed(b.param("coefficient"), 4) + " (input units per output unit cubed) acts at " + out +
+           "; it shows at the largest amplitudes.";
+  if (k == "hysteresis")
+    return "The actuator of " + in + " shows hysteresis (Bouc-Wen alpha " + fixed(b.param("alpha"), 3) + ").";
+  if (k == "periodic_disturbance")
+    return "A periodic disturbance at " + fixed(b.param("freq_hz"), 5) + " Hz with amplitude " +
+           fixed(b.param("amplitude"), 3) + " (output units) is present in " + out + " and is not caused by the input.";
+  if (k == "offset_drift")
+    return "The sensor " + out + " has an offset of " + fixed(b.param("offset"), 3) + " and a drift of " +
+           fixed(b.param("slope"), 3) + " per second (output units).";
+  if (k == "cross_coupling")
+    return "Input " + in + " moves output " + out + " (coupling gain " + fixed(b.param("gain"), 3) +
+           ") where the simulation has no coupling.";
+  return "Finding of kind " + k + ".";
+}
+
+DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Eigen::MatrixXd>& u_raw,
+                        const Eigen::Ref<const Eigen::MatrixXd>& y_raw, const DiagnoseOptions& o) {
+  Segments seg;
+  check_arguments(nominal, u_raw, y_raw, o, seg);
+  DiagnoseReport report;
+  report.fit_rows = seg.fit;
+  report.estimation_rows = seg.estimation;
+  const StateSpace& model = nominal.nominal;
+  const double Ts = model.Ts;
+
+  // Deviation coordinates of the nominal.
+  Eigen::MatrixXd u = u_raw, y = y_raw;
+  if (nominal.input_offset.size()) u.rowwise() -= nominal.input_offset.transpose();
+  if (nominal.output_offset.size()) y.rowwise() -= nominal.output_offset.transpose();
+
+  const AugmentedSimulator fast(model, 1, nominal.x0);
+  const AugmentedSimulator fine(model, o.detection.feedback_substeps, nominal.x0);
+  for (const auto& w : fine.warnings()) report.warnings.push_back(w);
+  auto simulator_for = [&](const std::vector<Candidate>& set, const std::vector<PhysicsBlock>& fixed) -> const AugmentedSimulator& {
+    bool feedback = std::any_of(fixed.begin(), fixed.end(),
+                                [](const PhysicsBlock& b) { return b.info().stage == BlockStage::plant_feedback; });
+    for (const auto& c : set) feedback = feedback || c.substeps > 1;
+    return feedback ? fine : fast;
+  };
+
+  std::vector<PhysicsBlock> base = nominal.blocks;  // blocks already in the model stay
+  std::vector<Candidate> accepted;
+  const Eigen::MatrixXd y_nominal = fine.simulate(base, u);
+
+  // 1. Locate, on the estimation part only.
+  {
+    const Eigen::Index E = seg.estimation;
+    report.location = locate_mismatch(u.topRows(E), y.topRows(E), (y - y_nominal).topRows(E), y_nominal.topRows(E), Ts, o.location);
+  }
+  const Eigen::Index fit_rows = seg.fit;
+  const auto u_fit = u.topRows(fit_rows);
+  const auto y_fit = y.topRows(fit_rows);
+
+  std::vector<std::string> tried_kinds;
+  for (int round = 1; round <= o.max_findings; ++round) {
+    const std::vector<PhysicsBlock> fixed = combine_blocks(base, accepted);
+    const AugmentedSimulator& current_sim = simulator_for({}, fixed);
+    const Eigen::MatrixXd current = current_sim.simulate(fixed, u, seg.estimation);
+
+    // 2. Name: detectors on the fit segment. Frequencies from the location of
+    // the nominal's residual (bands, peaks), excluding what is already explained.
+    DetectionData data;
+    data.simulator = &fine;
+    data.accepted = fixed;
+    data.u = u_fit;
+    data.y = y_fit;
+    data.current = current.topRows(fit_rows);
+    data.Ts = Ts;
+    for (const auto& ch : report.location.outputs) {
+      for (const auto& band : ch.bands) data.mode_frequencies_hz.push_back(band.peak_hz);
+      for (const auto& peak : ch.peaks) data.peak_frequencies_hz.push_back(peak.freq_hz);
+      if (ch.freq_hz.size() > 1) data.frequency_resolution_hz = ch.freq_hz[1] - ch.freq_hz[0];
+    }
+    std::vector<Candidate> candidates = propose_candidates(data, o.detection);
+    if (static_cast<int>(candidates.size()) > o.candidates_per_round) candidates.resize(o.candidates_per_round);
+
+    // 3. Model and judge each on the selection segment.
+    const int tried = static_cast<int>(candidates.size());
+    if (tried == 0) break;
+    const double level = o.significance / tried;  // Bonferroni over the candidates of the round
+    const double t_threshold = normal_quantile(1.0 - level);
+    const double before_fit = mean_fit(y.middleRows(seg.fit, seg.estimation - seg.fit),
+                                       current.middleRows(seg.fit, seg.estimation - seg.fit));
+    int best = -1;
+    double best_score = -std::numeric_limits<double>::infinity();
+    std::vector<JudgedCandidate> judged;
+    for (const auto& cand : candidates) {
+      const AugmentedSimulator& sim = simulator_for({cand}, fixed);
+      CandidateFitResult fitted = fit_candidates(sim, fixed, {cand}, u_fit, y_fit, fit_rows, o.fit);
+      JudgedCandidate j;
+      j.candidate = fitted.fitted.front();
+      j.round = round;
+      const std::vector<PhysicsBlock> with = combine_blocks(fixed, fitted.fitted);
+      const Eigen::MatrixXd after = sim.simulate(with, u, seg.estimation);
+      const Eigen::Index sel = seg.estimation - seg.fit;
+      j.selection_gain = mean_fit(y.middleRows(seg.fit, sel), after.middleRows(seg.fit, sel)) - before_fit;
+      j.t_statistic = improvement_z(y, current, after, seg.fit, seg.estimation, o.max_correlation_lag);
+      j.t_threshold = t_threshold;
+      const double penalised = j.selection_gain - o.penalty_points_per_parameter * static_cast<double>(j.candidate.free.size());
+      j.significant = j.t_statistic > t_threshold && penalised > o.min_gain_points;
+      if (j.significant && penalised > best_score) {
+        best_score = penalised;
+        best = static_cast<int>(judged.size());
+      }
+      judged.push_back(j);
+    }
+    for (const auto& j : judged) report.considered.push_back(j);
+    if (best < 0) break;
+    accepted.push_back(judged[best].candidate);
+    // Refit the accepted blocks together (local stage only: each has a good start).
+    CandidateFitOptions joint = o.fit;
+    joint.global_evaluations_per_parameter = 0;
+    accepted = fit_candidates(simulator_for(accepted, base), base, accepted, u_fit, y_fit, fit_rows, joint).fitted;
+  }
+
+  // 4. Prove: refit on the whole estimation part, then score on validation.
+  if (!accepted.empty()) {
+    CandidateFitOptions final_fit = o.fit;
+    final_fit.global_evaluations_per_parameter = 0;
+    accepted = fit_candidates(simulator_for(accepted, base), base, accepted, u.topRows(seg.estimation),
+                              y.topRows(seg.estimation), seg.estimation, final_fit)
+                   .fitted;
+  }
+  const Eigen::Index V = seg.total - seg.estimation;
+  const auto y_val = y.bottomRows(V);
+  std::vector<Candidate> so_far;
+  Eigen::MatrixXd previous = y_nominal;
+  report.fit_before_per_output = fit_percent(y_val, y_nominal.bottomRows(V));
+  report.fit_before = report.fit_before_per_output.mean();
+  for (const auto& c : accepted) {
+    so_far.push_back(c);
+    const Eigen::MatrixXd next = simulator_for(so_far, base).simulate(combine_blocks(base, so_far), u);
+    Finding f;
+    f.candidate = c;
+    f.fit_before = mean_fit(y_val, previous.bottomRows(V));
+    f.fit_after = mean_fit(y_val, next.bottomRows(V));
+    for (const auto& j : report.considered)
+      if (j.candidate.block.kind == c.block.kind && j.candidate.block.input == c.block.input &&
+          j.candidate.block.output == c.block.output && j.significant)
+        f.selection_gain = j.selection_gain, f.t_statistic = j.t_statistic;
+    f.band_hz = band_of(c.block, report.location);
+    f.time_windows_s = flagged_windows(c.block, report.location);
+    f.summary = finding_summary(c.block, model.input_names, model.output_names);
+    report.findings.push_back(f);
+    previous = next;
+  }
+  report.fit_after_per_output = fit_percent(y_val, previous.bottomRows(V));
+  report.fit_after = report.fit_after_per_output.mean();
+  report.simulated_before = y_nominal;
+  report.simulated_after = previous;
+  if (nominal.output_offset.size()) {
+    report.simulated_before.rowwise() += nominal.output_offset.transpose();
+    report.simulated_after.rowwise() += nominal.output_offset.transpose();
+  }
+  std::ostringstream v;
+  v << "last " << fixed(100.0 * static_cast<double>(V) / static_cast<double>(seg.total), 3) << " % of samples (" << V << " of "
+    << seg.total << ")";
+  report.validation = v.str();
+
+  report.augmented = nominal;
+  report.augmented.blocks = combine_blocks(base, accepted);
+  report.augmented.substeps = simulator_for(accepted, base).substeps();
+  return report;
+}
+
+}  // namespace sysid

@@ -1,0 +1,314 @@
+// Detectors of the physics hypotheses; the method is documented in
+// include/sysid/diagnose/hypotheses.hpp.
+#include "sysid/diagnose/hypotheses.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <sstream>
+
+namespace sysid {
+
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+constexpr double kTiny = std::numeric_limits<double>::min();
+
+/// Shared quantities of the detection data.
+struct Context {
+  const DetectionData& d;
+  const DetectionOptions& o;
+  Eigen::Index rows = 0, m = 0, l = 0;
+  Eigen::VectorXd output_weight;  ///< 1 / std(y_i)
+  Eigen::MatrixXd residual;       ///< y - current
+  double residual_energy = 0.0;   ///< weighted
+
+  Context(const DetectionData& data, const DetectionOptions& options) : d(data), o(options) {
+    rows = d.y.rows();
+    m = d.u.cols();
+    l = d.y.cols();
+    output_weight.resize(l);
+    for (Eigen::Index i = 0; i < l; ++i) {
+      const double sd = std::sqrt((d.y.col(i).array() - d.y.col(i).mean()).square().mean());
+      output_weight[i] = 1.0 / std::max(sd, kTiny);
+    }
+    residual = d.y - d.current;
+    residual_energy = weighted(residual).squaredNorm();
+  }
+
+  Eigen::VectorXd weighted(const Eigen::MatrixXd& signal) const {
+    Eigen::MatrixXd w = signal * output_weight.asDiagonal();
+    return Eigen::Map<const Eigen::VectorXd>(w.data(), w.size());
+  }
+  /// Weighted change of the output when `block` is added to the accepted ones.
+  Eigen::VectorXd effect(const PhysicsBlock& block) const {
+    std::vector<PhysicsBlock> blocks = d.accepted;
+    blocks.push_back(block);
+    return weighted(d.simulator->simulate(blocks, d.u, rows) - d.current);
+  }
+  /// Fraction of the residual energy explained by adding `effect` as it is.
+  double explained_as_is(const Eigen::VectorXd& change) const {
+    const Eigen::VectorXd r = weighted(residual);
+    return residual_energy > 0 ? 1.0 - (r - change).squaredNorm() / residual_energy : 0.0;
+  }
+  /// Least squares of the residual on the columns of G: coefficients and the
+  /// fraction of the residual energy they explain (QR, no normal equations).
+  std::pair<Eigen::VectorXd, double> regress(const Eigen::MatrixXd& G) const {
+    const Eigen::VectorXd r = weighted(residual);
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(G);
+    if (qr.rank() < G.cols() || residual_energy <= 0) return {Eigen::VectorXd::Zero(G.cols()), 0.0};
+    const Eigen::VectorXd c = qr.solve(r);
+    return {c, 1.0 - (r - G * c).squaredNorm() / residual_energy};
+  }
+  double rms(const Eigen::VectorXd& x) const { return std::sqrt(x.squaredNorm() / std::max<double>(1, x.size())); }
+  double duration() const { return static_cast<double>(rows) * d.Ts; }
+};
+
+PhysicsBlock make_block(const std::string& kind, long input, long output) {
+  PhysicsBlock b;
+  b.kind = kind;
+  b.input = input;
+  b.output = output;
+  for (const char* name : b.info().parameters) b.params[name] = 0.0;
+  return b;
+}
+
+std::string percent(double fraction) {
+  std::ostringstream s;
+  s.precision(3);
+  s << 100.0 * fraction << " %";
+  return s.str();
+}
+
+/// A single-parameter effect vanishing at p0: the sensitivity regression.
+Candidate linearised(const Context& c, PhysicsBlock block, const std::string& name, double p0, double delta,
+                     FreeParameter bound, int substeps, const std::string& what) {
+  block.params[name] = p0 + delta;
+  const Eigen::VectorXd g = c.effect(block) / delta;
+  const auto [coefficient, explained] = c.regress(g);
+  Candidate cand;
+  const double start = std::clamp(p0 + coefficient[0], bound.lower, bound.upper);
+  block.params[name] = bound.log_scale ? std::max(start, bound.lower) : start;
+  cand.block = block;
+  cand.free = {bound};
+  cand.substeps = substeps;
+  cand.detector_score = std::max(0.0, explained);
+  cand.evidence = what + " explains " + percent(cand.detector_score) + " of the residual energy (linearised)";
+  return cand;
+}
+
+void add_sensor_candidates(const Context& c, std::vector<Candidate>& out) {
+  for (Eigen::Index i = 0; i < c.l; ++i) {
+    const double y_rms = c.rms(c.d.y.col(i).array() - c.d.y.col(i).mean());
+    out.push_back(linearised(c, make_block("gain_error", 0, i), "ratio", 1.0, 0.01, {"ratio", 0.5, 2.0, false}, 1,
+                             "a scaled copy of the simulated output"));
+    {  // offset and drift are linear: two regressors, exact least squares.
+      PhysicsBlock b = make_block("offset_drift", 0, i);
+      Eigen::MatrixXd G(c.rows * c.l, 2);
+      b.params["offset"] = 1.0;
+      G.col(0) = c.effect(b);
+      b.params["offset"] = 0.0;
+      b.params["slope"] = 1.0;
+      G.col(1) = c.effect(b);
+      const auto [coef, explained] = c.regress(G);
+      const double T = c.duration();
+      b.params["offset"] = std::clamp(coef[0], -3 * y_rms, 3 * y_rms);
+      b.params["slope"] = std::clamp(coef[1], -3 * y_rms / T, 3 * y_rms / T);
+      Candidate cand{b, {{"offset", -3 * y_rms, 3 * y_rms}, {"slope", -3 * y_rms / T, 3 * y_rms / T}}, 1,
+                     std::max(0.0, explained), "a constant and a ramp explain " + percent(std::max(0.0, explained)) +
+                                                   " of the residual energy"};
+      out.push_back(cand);
+    }
+    for (double f0 : c.d.peak_frequencies_hz) {
+      // Zoom around the spectral peak: the cost of a sine in frequency is as
+      // narrow as 1/T, far finer than the spectral bins, so scan at 0.05/T.
+      const double T = c.duration(), df = std::max(c.d.frequency_resolution_hz, 1.0 / T);
+      const Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(c.rows, 0.0, (c.rows - 1) * c.d.Ts);
+      const Eigen::VectorXd r = c.residual.col(i);
+      double best_f = f0, best_power = -1, best_a = 0, best_b = 0;
+      for (double f = std::max(f0 - 1.5 * df, 0.5 / T); f <= f0 + 1.5 * df; f += 0.05 / T) {
+        Eigen::MatrixXd G(c.rows, 2);
+        G.col(0) = (kTwoPi * f * t.array()).sin();
+        G.col(1) = (kTwoPi * f * t.array()).cos();
+        const Eigen::Vector2d ab = (G.transpose() * G).ldlt().solve(G.transpose() * r);  // 2x2, well conditioned
+        const double power = (G * ab).squaredNorm();
+        if (power > best_power) best_power = power, best_f = f, best_a = ab[0], best_b = ab[1];
+      }
+      PhysicsBlock b = make_block("periodic_disturbance", 0, i);
+      const double amplitude = std::hypot(best_a, best_b), phase = std::atan2(best_b, best_a);
+      b.params["freq_hz"] = best_f;
+      b.params["amplitude"] = amplitude;
+      b.params["phase_rad"] = phase;
+      const double explained = c.explained_as_is(c.effect(b));
+      out.push_back({b,
+                     {{"freq_hz", best_f - 0.5 / T, best_f + 0.5 / T},
+                      {"amplitude", 0.0, 3.0 * amplitude + kTiny},
+                      {"phase_rad", phase - std::numbers::pi, phase + std::numbers::pi}},
+                     1, std::max(0.0, explained),
+                     "a residual peak not coherent with the input; a sine explains " + percent(std::max(0.0, explained))});
+    }
+  }
+}
+
+void add_mode_candidates(const Context& c, long j, long i, std::vector<Candidate>& out) {
+  for (double f0 : c.d.mode_frequencies_hz) {
+    // Grid in frequency and damping; at each point the two residue gains enter
+    // linearly and are solved by least squares.
+    Candidate best;
+    best.detector_score = -1;
+    const double f_max = 0.49 / c.d.Ts;  // a mode must stay below Nyquist
+    for (double scale : {0.97, 0.985, 1.0, 1.015, 1.03}) {
+      if (f0 * scale >= f_max) continue;
+      for (double zeta : {0.005, 0.02, 0.06}) {
+        PhysicsBlock b = make_block("missing_mode", j, i);
+        b.params["freq_hz"] = f0 * scale;
+        b.params["damping"] = zeta;
+        Eigen::MatrixXd G(c.rows * c.l, 2);
+        b.params["static_gain"] = 1.0;
+        G.col(0) = c.effect(b);
+        b.params["static_gain"] = 0.0;
+        b.params["velocity_gain"] = 1.0;
+        G.col(1) = c.effect(b);
+        const auto [coef, explained] = c.regress(G);
+        if (explained > best.detector_score) {
+          b.params["static_gain"] = coef[0];
+          b.params["velocity_gain"] = coef[1];
+          best.block = b;
+          best.detector_score = explained;
+        }
+      }
+    }
+    if (best.detector_score < 0) continue;  // every grid point beyond Nyquist
+    const double f = best.block.param("freq_hz");
+    const double gs = best.block.param("static_gain"), gv = best.block.param("velocity_gain");
+    const double reach = 4.0 * std::max(std::abs(gs), std::abs(gv)) + kTiny;
+    best.free = {{"freq_hz", 0.85 * f, std::min(1.15 * f, f_max), true},
+                 {"damping", 0.001, 0.2, true},
+                 {"static_gain", -reach, reach},
+                 {"velocity_gain", -reach, reach}};
+    best.detector_score = std::max(0.0, best.detector_score);
+    best.evidence = "the model-error FRF is significant near " + std::to_string(f0) + " Hz; a mode there explains " +
+                    percent(best.detector_score);
+    out.push_back(best);
+  }
+}
+
+void add_actuator_candidates(const Context& c, long j, std::vector<Candidate>& out) {
+  const long out_channel = j < c.l ? j : 0;
+  const Eigen::VectorXd uj = c.d.u.col(j);
+  const double u_rms = c.rms(uj), u_max = uj.cwiseAbs().maxCoeff(), u_range = uj.maxCoeff() - uj.minCoeff();
+  const double Ts = c.d.Ts;
+  if (!(u_rms > 0)) return;
+  out.push_back(linearised(c, make_block("time_delay", j, out_channel), "delay_s", 0.0, Ts,
+                           {"delay_s", 0.0, c.o.max_delay_samples * Ts}, 1, "a delayed copy of the input"));
+  {
+    // A lag of time constant tau acts like -tau du/dt at low frequency; the
+    // sensitivity is taken in tau and the start converted to a corner.
+    PhysicsBlock b = make_block("input_lag", j, out_channel);
+    const double tau_probe = 0.25 * Ts;
+    b.params["corner_hz"] = 1.0 / (kTwoPi * tau_probe);
+    const Eigen::VectorXd g = c.effect(b) / tau_probe;
+    const auto [coef, explained] = c.regress(g);
+    const double lo = 0.002 / Ts, hi = 1.0 / Ts;
+    const double tau = std::max(coef[0], 1.0 / (kTwoPi * hi));
+    b.params["corner_hz"] = std::clamp(1.0 / (kTwoPi * tau), lo, hi);
+    out.push_back({b, {{"corner_hz", lo, hi, true}}, 1, std::max(0.0, explained),
+                   "a low-passed input explains " + percent(std::max(0.0, explained)) + " (linearised)"});
+  }
+  out.push_back(linearised(c, make_block("deadzone", j, out_channel), "width", 0.0, 0.01 * u_rms,
+                           {"width", 0.0, u_max}, 1, "a dead band around zero input"));
+  out.push_back(linearised(c, make_block("backlash", j, out_channel), "width", 0.0, 0.01 * u_rms,
+                           {"width", 0.0, u_max}, 1, "play at input reversals"));
+  {
+    // Saturation is not smooth where it vanishes (limit = max |u|): grid of limits.
+    Candidate best;
+    best.detector_score = -1;
+    for (double q : {0.995, 0.98, 0.95, 0.9, 0.85, 0.8, 0.7}) {
+      PhysicsBlock b = make_block("saturation", j, out_channel);
+      b.params["limit"] = q * u_max;
+      const double explained = c.explained_as_is(c.effect(b));
+      if (explained > best.detector_score) best.block = b, best.detector_score = explained;
+    }
+    best.free = {{"limit", 0.3 * u_max, u_max}};
+    best.detector_score = std::max(0.0, best.detector_score);
+    best.evidence = "clipping the largest inputs explains " + percent(best.detector_score);
+    out.push_back(best);
+  }
+  {
+    // Bouc-Wen: loop width about alpha / (beta + gamma) in input units; grid over
+    // the amplitude alpha and the loop's saturation scale.
+    Candidate best;
+    best.detector_score = -1;
+    for (double alpha : {0.01, 0.03, 0.1, 0.3})
+      for (double shape : {1.0, 4.0, 16.0}) {
+        PhysicsBlock b = make_block("hysteresis", j, out_channel);
+        b.params["alpha"] = alpha;
+        b.params["beta"] = shape / u_range;
+        b.params["gamma"] = shape / u_range;
+        const double explained = c.explained_as_is(c.effect(b));
+        if (explained > best.detector_score) best.block = b, best.detector_score = explained;
+      }
+    best.free = {{"alpha", 0.0, 0.6}, {"beta", 0.05 / u_range, 200.0 / u_range, true}, {"gamma", -50.0 / u_range, 200.0 / u_range}};
+    best.detector_score = std::max(0.0, best.detector_score);
+    best.evidence = "a hysteresis loop (Bouc-Wen) in the actuator explains " + percent(best.detector_score);
+    out.push_back(best);
+  }
+}
+
+void add_plant_candidates(const Context& c, long j, long i, std::vector<Candidate>& out) {
+  const Eigen::VectorXd uj = c.d.u.col(j);
+  const double u_rms = c.rms(uj), u_max = uj.cwiseAbs().maxCoeff();
+  if (!(u_rms > 0)) return;
+  const Eigen::VectorXd position = c.d.current.col(i);
+  const double y_peak = std::max(position.cwiseAbs().maxCoeff(), kTiny);
+  const int substeps = c.d.simulator->substeps();
+  {
+    PhysicsBlock b = make_block("coulomb_friction", j, i);
+    const Eigen::VectorXd v = (position.tail(c.rows - 1) - position.head(c.rows - 1)) / c.d.Ts;
+    b.params["velocity_scale"] = std::max(c.o.friction_velocity_fraction * c.rms(v), kTiny);
+    out.push_back(linearised(c, b, "level", 0.0, 0.01 * u_rms, {"level", 0.0, u_max}, substeps,
+                             "a force opposing the velocity's sign"));
+  }
+  {
+    const double reach = u_max / (y_peak * y_peak * y_peak);  // force at the largest amplitude up to max |u|
+    out.push_back(linearised(c, make_block("cubic_stiffness", j, i), "coefficient", 0.0, 0.01 * reach,
+                             {"coefficient", -reach, reach}, substeps, "a force growing with the cube of the position"));
+  }
+  add_mode_candidates(c, j, i, out);
+}
+
+void add_coupling_candidates(const Context& c, std::vector<Candidate>& out) {
+  if (c.l < 2) return;
+  for (long j = 0; j < std::min(c.m, c.l); ++j)
+    for (long i = 0; i < c.l; ++i) {
+      if (i == j) continue;
+      out.push_back(linearised(c, make_block("cross_coupling", j, i), "gain", 0.0, 0.01, {"gain", -2.0, 2.0}, 1,
+                               "input " + std::to_string(j + 1) + "'s motion seen at output " + std::to_string(i + 1)));
+    }
+}
+
+}  // namespace
+
+std::vector<Candidate> propose_candidates(const DetectionData& data, const DetectionOptions& options) {
+  if (data.simulator == nullptr) throw std::invalid_argument("propose_candidates: need a simulator");
+  if (data.u.rows() != data.y.rows() || data.current.rows() != data.y.rows() || data.current.cols() != data.y.cols())
+    throw std::invalid_argument("propose_candidates: need u, y and current with the same rows (and y, current the same columns)");
+  if (!(data.Ts > 0)) throw std::invalid_argument("propose_candidates: need Ts > 0");
+  const Context c(data, options);
+  std::vector<Candidate> out;
+  add_sensor_candidates(c, out);
+  for (long j = 0; j < c.m; ++j) {
+    add_actuator_candidates(c, j, out);
+    // Forces inside the plant are collocated: input j acts where output j is
+    // measured (square MIMO) or on the only output (SISO/SIMO).
+    for (long i = 0; i < c.l; ++i)
+      if (c.l == 1 || i == j) add_plant_candidates(c, j, i, out);
+  }
+  add_coupling_candidates(c, out);
+  std::stable_sort(out.begin(), out.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.detector_score > b.detector_score; });
+  return out;
+}
+
+}  // namespace sysid
