@@ -21,7 +21,7 @@ struct DiagnoseArgs {
   LogArgs log;
   int max_findings = 4;
   double significance = 0.01;
-  int substeps = 4;
+  int substeps = 0;
 };
 
 std::string describe_finding(std::size_t rank, const Finding& f) {
@@ -126,9 +126,11 @@ Verb register_diagnose(CLI::App& app) {
   cmd->add_option("--significance", args->significance, "level of the acceptance test per round (Bonferroni over the candidates)")
       ->capture_default_str()
       ->check(CLI::Range(1e-9, 0.5));
-  cmd->add_option("--substeps", args->substeps, "simulation steps per sample for forces inside the plant")
+  cmd->add_option("--substeps", args->substeps,
+                  "simulation steps per sample for forces inside the plant (0: 4 when the model has no direct "
+                  "feedthrough D, else 1 with the feedthrough solved implicitly)")
       ->capture_default_str()
-      ->check(CLI::Range(1, 64));
+      ->check(CLI::Range(0, 64));
   cmd->footer(
       "The record is split in time: the first 50 % fits the candidate physics, the next 20 %\n"
       "ranks and accepts them (a paired test on the simulation errors), the last 30 % is\n"

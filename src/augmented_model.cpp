@@ -134,7 +134,7 @@ struct FeedbackForce {
   long input = 0, output = 0;
   bool friction = false;
   double level = 0.0, velocity_scale = 1.0;  ///< friction
-  double coefficient = 0.0;                  ///< cubic stiffness
+  double coefficient = 0.0, linear = 0.0;    ///< cubic stiffness: coefficient y^3 + linear y
 };
 
 bool needs_core_loop(const std::vector<PhysicsBlock>& blocks) {
@@ -230,10 +230,14 @@ Eigen::MatrixXd AugmentedSimulator::simulate(const std::vector<PhysicsBlock>& bl
       }
       if (is_kind(b, "coulomb_friction"))
         feedback.push_back({b.input, b.output, true, b.param("level"), b.param("velocity_scale"), 0.0});
-      if (is_kind(b, "cubic_stiffness")) feedback.push_back({b.input, b.output, false, 0.0, 1.0, b.param("coefficient")});
+      if (is_kind(b, "cubic_stiffness"))
+        feedback.push_back({b.input, b.output, false, 0.0, 1.0, b.param("coefficient"), b.param("linear_coefficient")});
     }
+    // Buffers allocated once: this loop runs N * substeps times per simulation
+    // and a fit runs hundreds of simulations.
     Eigen::VectorXd x = m_x0.size() ? m_x0 : Eigen::VectorXd::Zero(n);
-    Eigen::VectorXd f(m), f_previous = Eigen::VectorXd::Zero(m), position(l), velocity(l), previous_position(l);
+    Eigen::VectorXd x_next(n), x_rate(n), f(m), f_previous = Eigen::VectorXd::Zero(m), position(l), velocity(l),
+        previous_position(l), y_k(l);
     const bool exact_velocity = m_continuous.has_value();
     bool first = true;
     for (Eigen::Index k = 0; k < N; ++k) {
@@ -246,22 +250,43 @@ Eigen::MatrixXd AugmentedSimulator::simulate(const std::vector<PhysicsBlock>& bl
           position.noalias() = nom.C * x;
           for (const auto& mode : modes) position[mode.output] += mode.position();
           if (exact_velocity) {
-            velocity.noalias() = nom.C * (m_continuous->A * x + m_continuous->B * f_previous);
+            x_rate.noalias() = m_continuous->A * x;
+            x_rate.noalias() += m_continuous->B * f_previous;
+            velocity.noalias() = nom.C * x_rate;
             for (const auto& mode : modes) velocity[mode.output] += mode.velocity(f_previous[mode.input]);
           } else {
-            velocity = first ? Eigen::VectorXd::Zero(l) : Eigen::VectorXd((position - previous_position) / h);
+            if (first) velocity.setZero();
+            else velocity = (position - previous_position) / h;
             previous_position = position;
           }
-          for (const auto& fb : feedback) {
-            const double p = position[fb.output], v = velocity[fb.output];
-            f[fb.input] -= fb.friction ? fb.level * std::tanh(v / fb.velocity_scale) : fb.coefficient * p * p * p;
+          // With a direct feedthrough D the measured position depends on the force
+          // it causes: solve p = C x + D f(p) by fixed-point iteration (it contracts
+          // while |D df/dp| < 1, i.e. for any force small against the drive).
+          const Eigen::VectorXd drive_force = f;
+          const bool feedthrough = nom.D.cwiseAbs().maxCoeff() > 0.0;
+          const Eigen::VectorXd c_position = position;
+          for (int iteration = 0; iteration < (feedthrough ? 20 : 1); ++iteration) {
+            f = drive_force;
+            for (const auto& fb : feedback) {
+              const double p = position[fb.output], v = velocity[fb.output];
+              f[fb.input] -= fb.friction ? fb.level * std::tanh(v / fb.velocity_scale) : (fb.coefficient * p * p + fb.linear) * p;
+            }
+            if (!feedthrough) break;
+            const Eigen::VectorXd updated = c_position + nom.D * f;
+            const double change = (updated - position).cwiseAbs().maxCoeff();
+            position = updated;
+            if (change <= 1e-13 * (1.0 + position.cwiseAbs().maxCoeff())) break;
           }
         }
         if (s == 0) {
-          y.row(k).noalias() = (nom.C * x + nom.D * f).transpose();
-          for (const auto& mode : modes) y(k, mode.output) += mode.position();
+          y_k.noalias() = nom.C * x;
+          y_k.noalias() += nom.D * f;
+          for (const auto& mode : modes) y_k[mode.output] += mode.position();
+          y.row(k) = y_k.transpose();
         }
-        x = m_step.A * x + m_step.B * f;
+        x_next.noalias() = m_step.A * x;
+        x_next.noalias() += m_step.B * f;
+        x.swap(x_next);
         for (auto& mode : modes) mode.z = mode.Phi * mode.z + mode.Gamma * f[mode.input];
         for (auto& lag : lags) lag.state = lag.decay * lag.state + (1.0 - lag.decay) * drive(k, lag.input);
         f_previous = f;

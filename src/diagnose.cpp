@@ -3,6 +3,11 @@
 #include "sysid/diagnose/diagnose.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <exception>
+#include <functional>
+#include <mutex>
+#include <thread>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -51,6 +56,30 @@ double improvement_z(const Eigen::MatrixXd& y, const Eigen::MatrixXd& before, co
   }
   if (!(variance > 0)) return gain > 0 ? std::numeric_limits<double>::infinity() : 0.0;
   return gain / std::sqrt(variance);
+}
+
+/// Runs body(0..count-1) on up to hardware_concurrency threads; the first
+/// exception thrown by any call is rethrown here after all threads joined.
+void parallel_for(std::size_t count, const std::function<void(std::size_t)>& body) {
+  const std::size_t workers = std::min<std::size_t>(count, std::max(1u, std::thread::hardware_concurrency()));
+  std::atomic<std::size_t> next{0};
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
+  auto work = [&] {
+    for (std::size_t k = next++; k < count; k = next++) {
+      try {
+        body(k);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(failure_mutex);
+        if (!failure) failure = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (std::size_t t = 1; t < workers; ++t) threads.emplace_back(work);
+  work();
+  for (auto& t : threads) t.join();
+  if (failure) std::rethrow_exception(failure);
 }
 
 std::string fixed(double v, int digits) {
@@ -167,7 +196,9 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
   if (nominal.output_offset.size()) y.rowwise() -= nominal.output_offset.transpose();
 
   const AugmentedSimulator fast(model, 1, nominal.x0);
-  const AugmentedSimulator fine(model, o.detection.feedback_substeps, nominal.x0);
+  const int substeps = o.detection.feedback_substeps > 0 ? o.detection.feedback_substeps
+                                                          : (model.D.cwiseAbs().maxCoeff() > 0.0 ? 1 : 4);
+  const AugmentedSimulator fine(model, substeps, nominal.x0);
   for (const auto& w : fine.warnings()) report.warnings.push_back(w);
   auto simulator_for = [&](const std::vector<Candidate>& set, const std::vector<PhysicsBlock>& fixed) -> const AugmentedSimulator& {
     bool feedback = std::any_of(fixed.begin(), fixed.end(),
@@ -221,11 +252,14 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
                                        current.middleRows(seg.fit, seg.estimation - seg.fit));
     int best = -1;
     double best_score = -std::numeric_limits<double>::infinity();
-    std::vector<JudgedCandidate> judged;
-    for (const auto& cand : candidates) {
+    // Candidates are independent: fit them on all cores (each thread its own NLopt
+    // instance; the simulators are read-only).
+    std::vector<JudgedCandidate> judged(candidates.size());
+    parallel_for(candidates.size(), [&](std::size_t index) {
+      const Candidate& cand = candidates[index];
       const AugmentedSimulator& sim = simulator_for({cand}, fixed);
       CandidateFitResult fitted = fit_candidates(sim, fixed, {cand}, u_fit, y_fit, fit_rows, o.fit);
-      JudgedCandidate j;
+      JudgedCandidate& j = judged[index];
       j.candidate = fitted.fitted.front();
       j.round = round;
       const std::vector<PhysicsBlock> with = combine_blocks(fixed, fitted.fitted);
@@ -234,13 +268,15 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
       j.selection_gain = mean_fit(y.middleRows(seg.fit, sel), after.middleRows(seg.fit, sel)) - before_fit;
       j.t_statistic = improvement_z(y, current, after, seg.fit, seg.estimation, o.max_correlation_lag);
       j.t_threshold = t_threshold;
+    });
+    for (std::size_t index = 0; index < judged.size(); ++index) {
+      JudgedCandidate& j = judged[index];
       const double penalised = j.selection_gain - o.penalty_points_per_parameter * static_cast<double>(j.candidate.free.size());
       j.significant = j.t_statistic > t_threshold && penalised > o.min_gain_points;
       if (j.significant && penalised > best_score) {
         best_score = penalised;
-        best = static_cast<int>(judged.size());
+        best = static_cast<int>(index);
       }
-      judged.push_back(j);
     }
     for (const auto& j : judged) report.considered.push_back(j);
     if (best < 0) break;

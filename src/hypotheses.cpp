@@ -271,9 +271,27 @@ void add_plant_candidates(const Context& c, long j, long i, std::vector<Candidat
                              "a force opposing the velocity's sign"));
   }
   {
-    const double reach = u_max / (y_peak * y_peak * y_peak);  // force at the largest amplitude up to max |u|
-    out.push_back(linearised(c, make_block("cubic_stiffness", j, i), "coefficient", 0.0, 0.01 * reach,
-                             {"coefficient", -reach, reach}, substeps, "a force growing with the cube of the position"));
+    // Two sensitivities, the cubic and the linear stiffness (see physics_block.hpp:
+    // a best-linear-approximation nominal already holds part of the cubic's
+    // stiffness); both enter the force linearly, so least squares gives the start.
+    const double reach = u_max / (y_peak * y_peak * y_peak), linear_reach = u_max / y_peak;
+    PhysicsBlock b = make_block("cubic_stiffness", j, i);
+    Eigen::MatrixXd G(c.rows * c.l, 2);
+    b.params["coefficient"] = 0.01 * reach;
+    G.col(0) = c.effect(b) / (0.01 * reach);
+    b.params["coefficient"] = 0.0;
+    b.params["linear_coefficient"] = 0.01 * linear_reach;
+    G.col(1) = c.effect(b) / (0.01 * linear_reach);
+    const auto [coef, explained] = c.regress(G);
+    // Scored by what the cubic adds: the linear term alone is a stiffness error, not this physics.
+    const auto [linear_only, linear_explained] = c.regress(G.col(1));
+    (void)linear_only;
+    b.params["coefficient"] = std::clamp(coef[0], -reach, reach);
+    b.params["linear_coefficient"] = std::clamp(coef[1], -linear_reach, linear_reach);
+    const double score = std::max(0.0, explained - std::max(0.0, linear_explained));
+    out.push_back({b, {{"coefficient", -reach, reach}, {"linear_coefficient", -linear_reach, linear_reach}}, substeps, score,
+                   "a force growing with the cube of the position explains " + percent(score) +
+                       " beyond a linear stiffness change (linearised)"});
   }
   add_mode_candidates(c, j, i, out);
 }

