@@ -3,6 +3,7 @@
 #include <sysid/diagnose/diagnose.hpp>
 #include <sysid/io/atomic_file.hpp>
 #include <sysid/io/augmented_model_file.hpp>
+#include <sysid/spectral/welch.hpp>
 #include <sysid/validate/fit.hpp>
 
 #include <iostream>
@@ -10,6 +11,7 @@
 #include <sstream>
 
 #include "cli_common.hpp"
+#include "plot.hpp"
 #include "verbs.hpp"
 
 namespace sysid::cli {
@@ -17,7 +19,7 @@ namespace sysid::cli {
 namespace {
 
 struct DiagnoseArgs {
-  std::string model_path, log_path, json_path, out, validate;
+  std::string model_path, log_path, json_path, out, validate, plot;
   LogArgs log;
   int max_findings = 4;
   double significance = 0.01;
@@ -32,12 +34,112 @@ std::string describe_finding(std::size_t rank, const Finding& f) {
   return s.str();
 }
 
+/// Outputs drawn at most.
+constexpr Eigen::Index kMaxPlotOutputs = 4;
+
+/// Per output: the residual spectrum before and after on the held-out part with
+/// the located bands shaded, the residual energy by time window against its
+/// threshold, and measured / nominal / augmented over the held-out samples.
+void plot_diagnose(const DiagnoseArgs& a, const LoadedLog& log, const DiagnoseReport& r, const std::vector<std::string>& outputs) {
+  const Experiment& e = log.data.experiments.front();
+  const Eigen::Index N = e.samples(), start = r.estimation_rows, V = N - start;
+  const double fs = 1.0 / log.data.Ts;
+  PlotFigure fig;
+  fig.title = "diagnose " + a.model_path + " on " + a.log_path + ": held-out fit " + fmt(r.fit_before, 4) + " -> " +
+              fmt(r.fit_after, 4) + " %";
+  fig.columns = 1;
+  for (Eigen::Index i = 0; i < std::min<Eigen::Index>(e.y.cols(), kMaxPlotOutputs); ++i) {
+    const std::string name = outputs[static_cast<std::size_t>(i)];
+    WelchOptions wo;
+    wo.nfft = 1024;
+    const PowerSpectrum before = welch_psd(e.y.col(i).tail(V) - r.simulated_before.col(i).tail(V), fs, wo);
+    const PowerSpectrum after = welch_psd(e.y.col(i).tail(V) - r.simulated_after.col(i).tail(V), fs, wo);
+    PlotPanel spectrum;
+    spectrum.title = name + ": residual spectrum on the held-out samples (located bands shaded)";
+    spectrum.xlabel = "frequency [Hz]";
+    spectrum.ylabel = "PSD [units^2/Hz]";
+    spectrum.logy = true;
+    const Eigen::Index bins = before.freq_hz.size() - 1;  // DC left out (log axis)
+    PlotCurve b, f;
+    b.title = "nominal";
+    b.x = before.freq_hz.tail(bins);
+    b.y = before.psd.col(0).tail(bins);
+    f.title = "augmented";
+    f.x = after.freq_hz.tail(bins);
+    f.y = after.psd.col(0).tail(bins);
+    f.dashed = true;
+    const double lo = std::max(before.psd.col(0).tail(bins).minCoeff(), 1e-300), hi = before.psd.col(0).tail(bins).maxCoeff();
+    if (i < static_cast<Eigen::Index>(r.location.outputs.size()))
+      for (const auto& band : r.location.outputs[static_cast<std::size_t>(i)].bands) {
+        PlotCurve shade;
+        shade.x = Eigen::Vector2d(band.lo_hz, std::max(band.hi_hz, band.lo_hz + fs / 1024));
+        shade.y = shade.hi = Eigen::Vector2d(hi, hi);
+        shade.lo = Eigen::Vector2d(lo, lo);
+        shade.color = 3;
+        spectrum.curves.push_back(shade);
+      }
+    spectrum.curves.push_back(b);
+    spectrum.curves.push_back(f);
+    fig.panels.push_back(spectrum);
+
+    if (i < static_cast<Eigen::Index>(r.location.outputs.size())) {
+      const auto& ch = r.location.outputs[static_cast<std::size_t>(i)];
+      PlotPanel windows;
+      windows.title = name + ": nominal residual energy by time window (estimation part) / noise floor";
+      windows.xlabel = "time [s]";
+      windows.ylabel = "energy ratio";
+      const auto W = static_cast<Eigen::Index>(ch.windows.size());
+      PlotCurve energy, threshold;
+      energy.title = "window";
+      energy.style = "impulses";
+      threshold.title = "threshold";
+      threshold.dashed = true;
+      energy.x = energy.y = threshold.x = threshold.y = Eigen::VectorXd(W);
+      for (Eigen::Index w = 0; w < W; ++w) {
+        const auto& win = ch.windows[static_cast<std::size_t>(w)];
+        energy.x(w) = threshold.x(w) = 0.5 * (win.t0_s + win.t1_s);
+        energy.y(w) = win.energy_ratio;
+        threshold.y(w) = ch.window_threshold;
+      }
+      windows.curves = {energy, threshold};
+      if (W > 0) fig.panels.push_back(windows);
+    }
+
+    const Eigen::Index stride = plot_stride(V, 4000), np = (V + stride - 1) / stride;
+    PlotPanel overlay;
+    overlay.title = name + ": held-out samples";
+    overlay.xlabel = "time [s]";
+    overlay.ylabel = name;
+    PlotCurve measured, nominal, augmented;
+    measured.title = "measured";
+    nominal.title = "nominal";
+    augmented.title = "augmented";
+    augmented.dashed = true;
+    for (PlotCurve* c : {&measured, &nominal, &augmented}) {
+      c->x.resize(np);
+      c->y.resize(np);
+    }
+    for (Eigen::Index k = 0; k < np; ++k) {
+      const Eigen::Index row = start + k * stride;
+      measured.x(k) = nominal.x(k) = augmented.x(k) =
+          log.time.size() == N ? log.time(row) : static_cast<double>(row) * log.data.Ts;
+      measured.y(k) = e.y(row, i);
+      nominal.y(k) = r.simulated_before(row, i);
+      augmented.y(k) = r.simulated_after(row, i);
+    }
+    overlay.curves = {measured, nominal, augmented};
+    fig.panels.push_back(overlay);
+  }
+  write_plot(fig, a.plot, "diagnose");
+}
+
 void run_diagnose(const DiagnoseArgs& a) {
   const std::string verb = "diagnose";
   std::vector<std::string> sources{a.model_path, a.log_path};
   if (!a.validate.empty()) sources.push_back(a.validate);
   if (!a.json_path.empty()) refuse_to_overwrite_input(a.json_path, sources);
   if (!a.out.empty()) refuse_to_overwrite_input(a.out, sources);
+  if (!a.plot.empty()) refuse_to_overwrite_input(a.plot, sources);
   if (!a.json_path.empty() && a.json_path == a.out)
     throw CLI::ValidationError("--json", "the report and the augmented model cannot be the same file");
 
@@ -94,6 +196,7 @@ void run_diagnose(const DiagnoseArgs& a) {
     write_file_atomically(a.json_path, j.dump(2) + "\n");
     note(verb, "wrote the report to " + a.json_path);
   }
+  if (!a.plot.empty()) plot_diagnose(a, log, report, outputs);
   if (!a.out.empty()) {
     nlohmann::json provenance = {{"method", "diagnose"}, {"nominal", a.model_path}, {"data", a.log_path},
                                  {"fit_percent", report.fit_after}, {"validation", report.validation}};
@@ -119,6 +222,10 @@ Verb register_diagnose(CLI::App& app) {
   add_log_options(*cmd, args->log, spec);
   cmd->add_option("--json", args->json_path, "write the report (DESIGN.md report contract) to this JSON file");
   cmd->add_option("--out", args->out, "write the augmented model (\"type\": \"augmented\") to this JSON file");
+  cmd->add_option("--plot", args->plot,
+                  "residual spectra before/after with the located bands, residual energy by window, and held-out "
+                  "time series (.svg or .png; needs gnuplot)")
+      ->check(plot_path_validator());
   cmd->add_option("--validate", args->validate, "an independent recording (same columns) to report the fit on");
   cmd->add_option("--max-findings", args->max_findings, "at most this many effects are added")
       ->capture_default_str()

@@ -1,0 +1,161 @@
+// End-to-end: sysid diagnose on two generated concealed-physics scenarios (one
+// with nothing hidden, one with a dead zone), the augmented model it writes run
+// through `sysid show` and `sysid simulate`, and the ways a run must fail: bad
+// input files (exit 2, the file named), contradictory outputs (exit 1), an input
+// never overwritten, no half-written output.
+#include <sysid/io/csv.hpp>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "run_cli.hpp"
+
+using namespace sysid::test;
+using nlohmann::json;
+
+namespace {
+
+const std::string kSuite = std::string(SYSID_TEST_DATA_DIR) + "/concealed/";
+
+json read_json(const std::string& path) { return json::parse(read_text_file(path)); }
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+/// The header and the first `rows` data rows of a CSV file.
+std::string first_rows(const std::string& path, int rows) {
+  std::ifstream f(path);
+  std::string line, text;
+  for (int k = 0; k <= rows && std::getline(f, line); ++k) text += line + "\n";
+  return text;
+}
+
+}  // namespace
+
+TEST(DiagnoseApp, NullScenarioHasNoFindingsAndWritesTheNominal) {
+  const std::string dir = kSuite + "null_arm/";
+  TempDir tmp;
+  const CliResult r = run_cli({"diagnose", "--model", dir + "nominal.json", dir + "log.csv", "--inputs", "u", "--outputs",
+                               "y", "--json", tmp / "report.json", "--out", tmp / "model.json"});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_TRUE(contains(r.out, "findings: none")) << r.out;
+  const json report = read_json(tmp / "report.json");
+  ASSERT_TRUE(report["findings"].is_array());
+  EXPECT_TRUE(report["findings"].empty()) << report["findings"].dump(2);
+  // Nothing was added: validation fit unchanged, the written model is the nominal.
+  EXPECT_EQ(report["fit_before"].get<double>(), report["fit_after"].get<double>());
+  const json model = read_json(tmp / "model.json");
+  EXPECT_EQ(model.value("type", "state-space"), "state-space");
+  EXPECT_FALSE(model.contains("blocks"));
+  const json nominal = read_json(dir + "nominal.json");
+  EXPECT_EQ(model["A"], nominal["A"]);  // 17 digits both ways: the same numbers
+  EXPECT_EQ(model["B"], nominal["B"]);
+}
+
+TEST(DiagnoseApp, DeadZoneScenarioWritesAnAugmentedModelThatShowAndSimulateRun) {
+  const std::string dir = kSuite + "stage_deadzone/";
+  TempDir tmp;
+  const std::string aug = tmp / "augmented.json";
+  CliResult r = run_cli({"diagnose", "--model", dir + "nominal.json", dir + "log.csv", "--inputs", "u", "--outputs", "y",
+                         "--json", tmp / "report.json", "--out", aug});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  const json report = read_json(tmp / "report.json");
+  ASSERT_FALSE(report["findings"].empty()) << r.out;
+  EXPECT_EQ(report["findings"][0]["kind"], "deadzone") << r.out;
+  EXPECT_TRUE(contains(r.out, "deadzone")) << r.out;
+  const json model = read_json(aug);
+  EXPECT_EQ(model["type"], "augmented");
+  ASSERT_TRUE(model["blocks"].is_array() && !model["blocks"].empty()) << model.dump(2);
+  EXPECT_EQ(model["blocks"][0]["input"], "u");
+
+  r = run_cli({"show", aug});
+  EXPECT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_TRUE(contains(r.out, "augmented")) << r.out;
+
+  r = run_cli({"simulate", aug, dir + "log.csv", "--out", tmp / "sim.csv"});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  const sysid::CsvTable sim = sysid::read_csv(tmp / "sim.csv");
+  ASSERT_EQ(sim.names, (std::vector<std::string>{"t", "y"}));
+  EXPECT_EQ(sim.values.rows(), 20000);
+  EXPECT_TRUE(sim.values.allFinite());
+  // The dead zone changes the simulation: it is not the nominal's.
+  r = run_cli({"simulate", dir + "nominal.json", dir + "log.csv", "--out", tmp / "sim_nominal.csv"});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  const Eigen::VectorXd y_aug = csv_column(tmp / "sim.csv", "y"), y_nom = csv_column(tmp / "sim_nominal.csv", "y");
+  EXPECT_GT((y_aug - y_nom).norm(), 0.01 * y_nom.norm());
+
+  // x0 estimation is a linear least-squares problem: refused for a nonlinear model.
+  r = run_cli({"simulate", aug, dir + "log.csv", "--x0", "estimate", "--out", tmp / "sim_x0.csv"});
+  EXPECT_EQ(r.exit_code, 2) << describe(r);
+  EXPECT_TRUE(contains(r.err, "--x0 estimate") && contains(r.err, "augmented")) << r.err;
+  EXPECT_TRUE(contains(r.err, aug)) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(tmp / "sim_x0.csv"));
+}
+
+TEST(DiagnoseApp, BadInputFilesExitTwoNamingTheFile) {
+  const std::string dir = kSuite + "stage_deadzone/";
+  TempDir tmp;
+
+  // Model file missing.
+  CliResult r = run_cli({"diagnose", "--model", tmp / "missing.json", dir + "log.csv", "--json", tmp / "r.json"});
+  EXPECT_EQ(r.exit_code, 2) << describe(r);
+  EXPECT_TRUE(contains(r.err, tmp / "missing.json")) << r.err;
+
+  // A column the log does not have.
+  r = run_cli({"diagnose", "--model", dir + "nominal.json", dir + "log.csv", "--inputs", "nosuch", "--json", tmp / "r.json"});
+  EXPECT_EQ(r.exit_code, 2) << describe(r);
+  EXPECT_TRUE(contains(r.err, "nosuch")) << r.err;
+  EXPECT_TRUE(contains(r.err, dir + "log.csv")) << r.err;
+
+  // 300 samples cannot hold three segments of at least 200.
+  const std::string short_log = tmp / "short.csv";
+  write_text_file(short_log, first_rows(dir + "log.csv", 300));
+  r = run_cli({"diagnose", "--model", dir + "nominal.json", short_log, "--json", tmp / "r.json", "--out", tmp / "m.json"});
+  EXPECT_EQ(r.exit_code, 2) << describe(r);
+  EXPECT_TRUE(contains(r.err, short_log)) << r.err;
+  EXPECT_TRUE(contains(r.err, "samples")) << r.err;
+  // Nothing half-written by the failing runs.
+  EXPECT_FALSE(std::filesystem::exists(tmp / "r.json"));
+  EXPECT_FALSE(std::filesystem::exists(tmp / "m.json"));
+
+  // A hand-written augmented model whose dead zone lacks its width.
+  const std::string bad = tmp / "bad_block.json";
+  write_text_file(bad, R"({
+  "type": "augmented",
+  "nominal": {"Ts": 0.0005, "A": [[0.5]], "B": [[1.0]], "C": [[1.0]], "D": [[0.0]],
+              "inputs": ["u"], "outputs": ["y"]},
+  "blocks": [{"kind": "deadzone", "input": "u", "output": "y", "params": {}}],
+  "substeps": 1
+}
+)");
+  r = run_cli({"simulate", bad, dir + "log.csv", "--out", tmp / "sim.csv"});
+  EXPECT_EQ(r.exit_code, 2) << describe(r);
+  EXPECT_TRUE(contains(r.err, bad)) << r.err;
+  EXPECT_TRUE(contains(r.err, "blocks[0]") && contains(r.err, "width")) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(tmp / "sim.csv"));
+}
+
+TEST(DiagnoseApp, NeverOverwritesAnInputAndRefusesOneFileForTwoOutputs) {
+  const std::string dir = kSuite + "stage_deadzone/";
+  TempDir tmp;
+  // A copy of the log: the generated data are never put at risk.
+  const std::string log = tmp / "log.csv";
+  std::filesystem::copy_file(dir + "log.csv", log);
+  const std::string before = read_text_file(log);
+
+  CliResult r = run_cli({"diagnose", "--model", dir + "nominal.json", log, "--json", log});
+  EXPECT_NE(r.exit_code, 0) << describe(r);
+  EXPECT_TRUE(contains(r.err, "overwrite")) << r.err;
+  EXPECT_EQ(read_text_file(log), before);
+
+  r = run_cli({"diagnose", "--model", dir + "nominal.json", log, "--out", log});
+  EXPECT_NE(r.exit_code, 0) << describe(r);
+  EXPECT_EQ(read_text_file(log), before);
+
+  r = run_cli({"diagnose", "--model", dir + "nominal.json", log, "--json", tmp / "same.json", "--out", tmp / "same.json"});
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
+  EXPECT_FALSE(std::filesystem::exists(tmp / "same.json"));
+}
