@@ -93,12 +93,12 @@ AugmentedModel augmented_model_from_file(const ModelFile& file, const std::strin
         throw DataError(source, 0, 0, where + ".params." + name + ": expected a finite number");
       b.params[name] = p[name].get<double>();
     }
+    try {
+      check_physics_blocks({b}, m.nominal.inputs(), m.nominal.outputs(), m.nominal.Ts);
+    } catch (const std::invalid_argument& e) {
+      throw DataError(source, 0, 0, where + ": " + e.what());
+    }
     m.blocks.push_back(b);
-  }
-  try {
-    check_physics_blocks(m.blocks, m.nominal.inputs(), m.nominal.outputs(), m.nominal.Ts);
-  } catch (const std::invalid_argument& e) {
-    throw DataError(source, 0, 0, std::string("blocks: ") + e.what());
   }
   return m;
 }
@@ -143,8 +143,12 @@ nlohmann::json diagnose_report_to_json(const DiagnoseReport& r, double Ts) {
       windows = nlohmann::json::array();
       for (const auto& [t0, t1] : f.time_windows_s) windows.push_back({t0, t1});
     }
+    // DESIGN.md reports cross_coupling by the channels it couples.
+    const nlohmann::json reported = b.kind == "cross_coupling"
+                                        ? nlohmann::json{{"input", inputs.at(b.input)}, {"output", outputs.at(b.output)}}
+                                        : params_json(b, true);
     findings.push_back({{"kind", b.kind},
-                        {"params", params_json(b, true)},
+                        {"params", reported},
                         {"fit_before", f.fit_before},
                         {"fit_after", f.fit_after},
                         {"location",
