@@ -144,14 +144,16 @@ TEST_F(BadInput, UnreadableModelFile) {
   expect_data_error({"compare", no_d, log}, {no_d, "D"});
 }
 
-TEST_F(BadInput, AugmentedModelsAreNotSupportedYet) {
+// simulate, show and diagnose run augmented models (tests/app/diagnose.cpp); the
+// verbs that cannot yet refuse them with exit 2 instead of ignoring the blocks.
+TEST_F(BadInput, AugmentedModelsAreRefusedWhereNotSupported) {
   const std::string log = write_log("log.csv", valid_log_lines(100));
   const std::string model = dir / "aug.json";
   ModelFile f;
   f.type = "augmented";
   f.model = four_mode_plant();
   write_model_json(model, f);
-  expect_data_error({"simulate", model, log, "--out", dir / "sim.csv"}, {"augmented models are not supported yet"});
+  expect_data_error({"resid", model, log, "--out", dir / "resid.csv"}, {"augmented models are not supported yet"});
 }
 
 TEST_F(BadInput, OutputThatIsAnInputIsRefused) {
