@@ -65,6 +65,19 @@ struct Context {
   double duration() const { return static_cast<double>(rows) * d.Ts; }
 };
 
+/// Columns: the weighted output change per unit of each probed parameter, each
+/// probe taken alone from `block` (whose effect must vanish as it is) by its step.
+Eigen::MatrixXd sensitivities(const Context& c, const PhysicsBlock& block,
+                              const std::vector<std::pair<std::string, double>>& probes) {
+  Eigen::MatrixXd G(c.rows * c.l, static_cast<Eigen::Index>(probes.size()));
+  for (std::size_t k = 0; k < probes.size(); ++k) {
+    PhysicsBlock probed = block;
+    probed.params[probes[k].first] += probes[k].second;
+    G.col(static_cast<Eigen::Index>(k)) = c.effect(probed) / probes[k].second;
+  }
+  return G;
+}
+
 PhysicsBlock make_block(const std::string& kind, long input, long output) {
   PhysicsBlock b;
   b.kind = kind;
@@ -84,9 +97,8 @@ std::string percent(double fraction) {
 /// A single-parameter effect vanishing at p0: the sensitivity regression.
 Candidate linearised(const Context& c, PhysicsBlock block, const std::string& name, double p0, double delta,
                      FreeParameter bound, int substeps, const std::string& what) {
-  block.params[name] = p0 + delta;
-  const Eigen::VectorXd g = c.effect(block) / delta;
-  const auto [coefficient, explained] = c.regress(g);
+  block.params[name] = p0;
+  const auto [coefficient, explained] = c.regress(sensitivities(c, block, {{name, delta}}));
   Candidate cand;
   const double start = std::clamp(p0 + coefficient[0], bound.lower, bound.upper);
   block.params[name] = bound.log_scale ? std::max(start, bound.lower) : start;
@@ -105,13 +117,7 @@ void add_sensor_candidates(const Context& c, std::vector<Candidate>& out) {
                              "a scaled copy of the simulated output"));
     {  // offset and drift are linear: two regressors, exact least squares.
       PhysicsBlock b = make_block("offset_drift", 0, i);
-      Eigen::MatrixXd G(c.rows * c.l, 2);
-      b.params["offset"] = 1.0;
-      G.col(0) = c.effect(b);
-      b.params["offset"] = 0.0;
-      b.params["slope"] = 1.0;
-      G.col(1) = c.effect(b);
-      const auto [coef, explained] = c.regress(G);
+      const auto [coef, explained] = c.regress(sensitivities(c, b, {{"offset", 1.0}, {"slope", 1.0}}));
       const double T = c.duration();
       b.params["offset"] = std::clamp(coef[0], -3 * y_rms, 3 * y_rms);
       b.params["slope"] = std::clamp(coef[1], -3 * y_rms / T, 3 * y_rms / T);
@@ -164,13 +170,7 @@ void add_mode_candidates(const Context& c, long j, long i, std::vector<Candidate
         PhysicsBlock b = make_block("missing_mode", j, i);
         b.params["freq_hz"] = f0 * scale;
         b.params["damping"] = zeta;
-        Eigen::MatrixXd G(c.rows * c.l, 2);
-        b.params["static_gain"] = 1.0;
-        G.col(0) = c.effect(b);
-        b.params["static_gain"] = 0.0;
-        b.params["velocity_gain"] = 1.0;
-        G.col(1) = c.effect(b);
-        const auto [coef, explained] = c.regress(G);
+        const auto [coef, explained] = c.regress(sensitivities(c, b, {{"static_gain", 1.0}, {"velocity_gain", 1.0}}));
         if (explained > best.detector_score) {
           b.params["static_gain"] = coef[0];
           b.params["velocity_gain"] = coef[1];
@@ -276,12 +276,8 @@ void add_plant_candidates(const Context& c, long j, long i, std::vector<Candidat
     // stiffness); both enter the force linearly, so least squares gives the start.
     const double reach = u_max / (y_peak * y_peak * y_peak), linear_reach = u_max / y_peak;
     PhysicsBlock b = make_block("cubic_stiffness", j, i);
-    Eigen::MatrixXd G(c.rows * c.l, 2);
-    b.params["coefficient"] = 0.01 * reach;
-    G.col(0) = c.effect(b) / (0.01 * reach);
-    b.params["coefficient"] = 0.0;
-    b.params["linear_coefficient"] = 0.01 * linear_reach;
-    G.col(1) = c.effect(b) / (0.01 * linear_reach);
+    const Eigen::MatrixXd G =
+        sensitivities(c, b, {{"coefficient", 0.01 * reach}, {"linear_coefficient", 0.01 * linear_reach}});
     const auto [coef, explained] = c.regress(G);
     // Scored by what the cubic adds: the linear term alone is a stiffness error, not this physics.
     const auto [linear_only, linear_explained] = c.regress(G.col(1));
