@@ -236,9 +236,14 @@ Eigen::MatrixXd AugmentedSimulator::simulate(const std::vector<PhysicsBlock>& bl
     // Buffers allocated once: this loop runs N * substeps times per simulation
     // and a fit runs hundreds of simulations.
     Eigen::VectorXd x = m_x0.size() ? m_x0 : Eigen::VectorXd::Zero(n);
-    Eigen::VectorXd x_next(n), x_rate(n), f(m), f_previous = Eigen::VectorXd::Zero(m), position(l), velocity(l),
-        previous_position(l), y_k(l);
+    Eigen::VectorXd x_next(n), x_rate(n), f(m), drive_force(m), f_previous = Eigen::VectorXd::Zero(m), position(l),
+        structural_position(l), updated_position(l), velocity(l), previous_position(l), y_k(l);
     const bool exact_velocity = m_continuous.has_value();
+    // With a direct feedthrough D the measured position depends on the force it
+    // causes: p = C x + D f(p) is solved by fixed-point iteration (it contracts
+    // while |D df/dp| < 1, i.e. for any force small against the drive).
+    const bool feedthrough = nom.D.cwiseAbs().maxCoeff() > 0.0;
+    const int feedthrough_iterations = feedthrough ? 20 : 1;
     bool first = true;
     for (Eigen::Index k = 0; k < N; ++k) {
       for (int s = 0; s < M; ++s) {
@@ -259,22 +264,19 @@ Eigen::MatrixXd AugmentedSimulator::simulate(const std::vector<PhysicsBlock>& bl
             else velocity = (position - previous_position) / h;
             previous_position = position;
           }
-          // With a direct feedthrough D the measured position depends on the force
-          // it causes: solve p = C x + D f(p) by fixed-point iteration (it contracts
-          // while |D df/dp| < 1, i.e. for any force small against the drive).
-          const Eigen::VectorXd drive_force = f;
-          const bool feedthrough = nom.D.cwiseAbs().maxCoeff() > 0.0;
-          const Eigen::VectorXd c_position = position;
-          for (int iteration = 0; iteration < (feedthrough ? 20 : 1); ++iteration) {
+          drive_force = f;
+          structural_position = position;
+          for (int iteration = 0; iteration < feedthrough_iterations; ++iteration) {
             f = drive_force;
             for (const auto& fb : feedback) {
               const double p = position[fb.output], v = velocity[fb.output];
               f[fb.input] -= fb.friction ? fb.level * std::tanh(v / fb.velocity_scale) : (fb.coefficient * p * p + fb.linear) * p;
             }
             if (!feedthrough) break;
-            const Eigen::VectorXd updated = c_position + nom.D * f;
-            const double change = (updated - position).cwiseAbs().maxCoeff();
-            position = updated;
+            updated_position = structural_position;
+            updated_position.noalias() += nom.D * f;
+            const double change = (updated_position - position).cwiseAbs().maxCoeff();
+            position.swap(updated_position);
             if (change <= 1e-13 * (1.0 + position.cwiseAbs().maxCoeff())) break;
           }
         }

@@ -209,6 +209,10 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
 
   std::vector<PhysicsBlock> base = nominal.blocks;  // blocks already in the model stay
   std::vector<Candidate> accepted;
+  std::vector<JudgedCandidate> acceptance;  ///< how each accepted candidate passed, same order
+  // Refits after an acceptance start from good values: the local stage only.
+  CandidateFitOptions local_fit = o.fit;
+  local_fit.global_evaluations_per_parameter = 0;
   const Eigen::MatrixXd y_nominal = fine.simulate(base, u);
 
   // 1. Locate, on the estimation part only.
@@ -220,14 +224,14 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
   const auto u_fit = u.topRows(fit_rows);
   const auto y_fit = y.topRows(fit_rows);
 
-  std::vector<std::string> tried_kinds;
   for (int round = 1; round <= o.max_findings; ++round) {
     const std::vector<PhysicsBlock> fixed = combine_blocks(base, accepted);
     const AugmentedSimulator& current_sim = simulator_for({}, fixed);
     const Eigen::MatrixXd current = current_sim.simulate(fixed, u, seg.estimation);
 
-    // 2. Name: detectors on the fit segment. Frequencies from the location of
-    // the nominal's residual (bands, peaks), excluding what is already explained.
+    // 2. Name: detectors on the fit segment, scored on the current residual.
+    // Candidate frequencies come from the location of the nominal's residual
+    // (bands, peaks), computed once.
     DetectionData data;
     data.simulator = &fine;
     data.accepted = fixed;
@@ -281,37 +285,31 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
     for (const auto& j : judged) report.considered.push_back(j);
     if (best < 0) break;
     accepted.push_back(judged[best].candidate);
-    // Refit the accepted blocks together (local stage only: each has a good start).
-    CandidateFitOptions joint = o.fit;
-    joint.global_evaluations_per_parameter = 0;
-    accepted = fit_candidates(simulator_for(accepted, base), base, accepted, u_fit, y_fit, fit_rows, joint).fitted;
+    acceptance.push_back(judged[best]);
+    accepted = fit_candidates(simulator_for(accepted, base), base, accepted, u_fit, y_fit, fit_rows, local_fit).fitted;
   }
 
   // 4. Prove: refit on the whole estimation part, then score on validation.
-  if (!accepted.empty()) {
-    CandidateFitOptions final_fit = o.fit;
-    final_fit.global_evaluations_per_parameter = 0;
+  if (!accepted.empty())
     accepted = fit_candidates(simulator_for(accepted, base), base, accepted, u.topRows(seg.estimation),
-                              y.topRows(seg.estimation), seg.estimation, final_fit)
+                              y.topRows(seg.estimation), seg.estimation, local_fit)
                    .fitted;
-  }
   const Eigen::Index V = seg.total - seg.estimation;
   const auto y_val = y.bottomRows(V);
   std::vector<Candidate> so_far;
   Eigen::MatrixXd previous = y_nominal;
   report.fit_before_per_output = fit_percent(y_val, y_nominal.bottomRows(V));
   report.fit_before = report.fit_before_per_output.mean();
-  for (const auto& c : accepted) {
+  for (std::size_t k = 0; k < accepted.size(); ++k) {
+    const Candidate& c = accepted[k];
     so_far.push_back(c);
     const Eigen::MatrixXd next = simulator_for(so_far, base).simulate(combine_blocks(base, so_far), u);
     Finding f;
     f.candidate = c;
     f.fit_before = mean_fit(y_val, previous.bottomRows(V));
     f.fit_after = mean_fit(y_val, next.bottomRows(V));
-    for (const auto& j : report.considered)
-      if (j.candidate.block.kind == c.block.kind && j.candidate.block.input == c.block.input &&
-          j.candidate.block.output == c.block.output && j.significant)
-        f.selection_gain = j.selection_gain, f.t_statistic = j.t_statistic;
+    f.selection_gain = acceptance[k].selection_gain;
+    f.t_statistic = acceptance[k].t_statistic;
     f.band_hz = band_of(c.block, report.location);
     f.time_windows_s = flagged_windows(c.block, report.location);
     f.summary = finding_summary(c.block, model.input_names, model.output_names);
