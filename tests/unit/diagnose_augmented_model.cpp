@@ -12,7 +12,7 @@
 #include <numbers>
 #include <random>
 
-#include "../support/random_systems.hpp"
+#include "../support/diagnose_cases.hpp"
 
 namespace {
 
@@ -31,14 +31,7 @@ StateSpace oscillator(double f_hz, double zeta) {
                     MatrixXd::Zero(1, 1), 0.0);
 }
 
-PhysicsBlock block(const std::string& kind, std::map<std::string, double> params, long input = 0, long output = 0) {
-  PhysicsBlock b;
-  b.kind = kind;
-  b.params = std::move(params);
-  b.input = input;
-  b.output = output;
-  return b;
-}
+using sysid::test::physics_block;
 
 MatrixXd test_input(Eigen::Index n, std::uint64_t seed) { return sysid::test::white_noise(n, 1, seed); }
 
@@ -56,8 +49,8 @@ TEST(AugmentedModel, SensorBlocksAddExactly) {
   const MatrixXd u = test_input(2000, 2);
   const sysid::AugmentedSimulator sim(d);
   const MatrixXd y0 = sysid::simulate(d, u);
-  const MatrixXd y = sim.simulate({block("gain_error", {{"ratio", 1.05}}), block("offset_drift", {{"offset", 0.3}, {"slope", -0.2}}),
-                                   block("periodic_disturbance", {{"freq_hz", 50.0}, {"amplitude", 0.01}, {"phase_rad", 0.4}})},
+  const MatrixXd y = sim.simulate({physics_block("gain_error", {{"ratio", 1.05}}), physics_block("offset_drift", {{"offset", 0.3}, {"slope", -0.2}}),
+                                   physics_block("periodic_disturbance", {{"freq_hz", 50.0}, {"amplitude", 0.01}, {"phase_rad", 0.4}})},
                                   u);
   for (Eigen::Index k = 0; k < y.rows(); k += 97) {
     const double t = k * kTs;
@@ -79,7 +72,7 @@ TEST(AugmentedModel, MissingModeEqualsTheParallelConnectionDiscretisedExactly) {
   const MatrixXd u = test_input(4000, 3);
   const sysid::AugmentedSimulator sim(sysid::c2d_zoh(nominal_c, kTs));
   const MatrixXd y = sim.simulate(
-      {block("missing_mode", {{"freq_hz", 31.0}, {"damping", 0.01}, {"static_gain", static_gain}, {"velocity_gain", 0.0}})}, u);
+      {physics_block("missing_mode", {{"freq_hz", 31.0}, {"damping", 0.01}, {"static_gain", static_gain}, {"velocity_gain", 0.0}})}, u);
   EXPECT_LT(relative_error(y, sysid::simulate(parallel, u)), 1e-9);
 }
 
@@ -89,9 +82,9 @@ TEST(AugmentedModel, WholeSampleDelayShiftsAndFractionalDelayInterpolates) {
   const sysid::AugmentedSimulator sim(d);
   MatrixXd shifted = MatrixXd::Zero(1000, 1);
   shifted.bottomRows(998) = u.topRows(998);
-  EXPECT_LT(relative_error(sim.simulate({block("time_delay", {{"delay_s", 2 * kTs}})}, u), sysid::simulate(d, shifted)), 1e-13);
-  const MatrixXd y0 = sim.simulate({}, u), y1 = sim.simulate({block("time_delay", {{"delay_s", kTs}})}, u);
-  const MatrixXd half = sim.simulate({block("time_delay", {{"delay_s", 0.25 * kTs}})}, u);
+  EXPECT_LT(relative_error(sim.simulate({physics_block("time_delay", {{"delay_s", 2 * kTs}})}, u), sysid::simulate(d, shifted)), 1e-13);
+  const MatrixXd y0 = sim.simulate({}, u), y1 = sim.simulate({physics_block("time_delay", {{"delay_s", kTs}})}, u);
+  const MatrixXd half = sim.simulate({physics_block("time_delay", {{"delay_s", 0.25 * kTs}})}, u);
   EXPECT_LT(relative_error(half, 0.75 * y0 + 0.25 * y1), 1e-12);  // linear in the fraction
 }
 
@@ -108,7 +101,7 @@ TEST(AugmentedModel, InputLagConvergesToTheExactCascade) {
   const MatrixXd u = test_input(4000, 5);
   const MatrixXd exact = sysid::simulate(cascade, u);
   const StateSpace d = sysid::c2d_zoh(plant, kTs);
-  const auto lag = block("input_lag", {{"corner_hz", corner}});
+  const auto lag = physics_block("input_lag", {{"corner_hz", corner}});
   const double e1 = relative_error(sysid::AugmentedSimulator(d, 1).simulate({lag}, u), exact);
   const double e8 = relative_error(sysid::AugmentedSimulator(d, 8).simulate({lag}, u), exact);
   EXPECT_LT(e1, 2e-2);  // the lag's mean over the step is held: second order in wc Ts
@@ -145,8 +138,8 @@ TEST(AugmentedModel, PlantForcesConvergeToTheContinuousTimeSystem) {
   const double vrms = std::sqrt(((y_lin.tail(3999) - y_lin.head(3999)) / kTs).squaredNorm() / 3999);
   const double friction = 30.0, vs = 0.01 * vrms;
   const VectorXd exact = rk4_reference(u, w, zeta, k3, friction, vs);
-  const std::vector<PhysicsBlock> blocks = {block("cubic_stiffness", {{"coefficient", k3}, {"linear_coefficient", 0.0}}),
-                                            block("coulomb_friction", {{"level", friction}, {"velocity_scale", vs}})};
+  const std::vector<PhysicsBlock> blocks = {physics_block("cubic_stiffness", {{"coefficient", k3}, {"linear_coefficient", 0.0}}),
+                                            physics_block("coulomb_friction", {{"level", friction}, {"velocity_scale", vs}})};
   const double effect = (exact - y_lin).norm() / exact.norm();
   const double e1 = relative_error(sysid::AugmentedSimulator(d, 1).simulate(blocks, u), exact);
   const double e8 = relative_error(sysid::AugmentedSimulator(d, 8).simulate(blocks, u), exact);
@@ -158,19 +151,19 @@ TEST(AugmentedModel, PlantForcesConvergeToTheContinuousTimeSystem) {
 TEST(AugmentedModel, ActuatorNonlinearitiesOnHandWorkedSignals) {
   MatrixXd ramp(7, 1);
   ramp << -3, -2, -1, 0, 1, 2, 3;
-  const MatrixXd dz = sysid::actuator_output({block("deadzone", {{"width", 2.0}})}, ramp, kTs, 7);
+  const MatrixXd dz = sysid::actuator_output({physics_block("deadzone", {{"width", 2.0}})}, ramp, kTs, 7);
   EXPECT_TRUE(dz.col(0).isApprox((VectorXd(7) << -2, -1, 0, 0, 0, 1, 2).finished()));
-  const MatrixXd sat = sysid::actuator_output({block("saturation", {{"limit", 1.5}})}, ramp, kTs, 7);
+  const MatrixXd sat = sysid::actuator_output({physics_block("saturation", {{"limit", 1.5}})}, ramp, kTs, 7);
   EXPECT_TRUE(sat.col(0).isApprox((VectorXd(7) << -1.5, -1.5, -1, 0, 1, 1.5, 1.5).finished()));
   MatrixXd triangle(9, 1);
   triangle << 0, 1, 2, 3, 2, 1, 0, 1, 2;
-  const MatrixXd bl = sysid::actuator_output({block("backlash", {{"width", 2.0}})}, triangle, kTs, 9);
+  const MatrixXd bl = sysid::actuator_output({physics_block("backlash", {{"width", 2.0}})}, triangle, kTs, 9);
   // Up: follows u - 1; at the reversal it holds until u has come down by the width.
   EXPECT_TRUE(bl.col(0).isApprox((VectorXd(9) << 0, 0, 1, 2, 2, 2, 1, 1, 1).finished()));
-  const MatrixXd none = sysid::actuator_output({block("hysteresis", {{"alpha", 0.0}, {"beta", 1.0}, {"gamma", 1.0}})}, triangle, kTs, 9);
+  const MatrixXd none = sysid::actuator_output({physics_block("hysteresis", {{"alpha", 0.0}, {"beta", 1.0}, {"gamma", 1.0}})}, triangle, kTs, 9);
   EXPECT_TRUE(none.isApprox(triangle));
   // Bouc-Wen loop: going up and coming down through the same input gives different forces.
-  const MatrixXd hy = sysid::actuator_output({block("hysteresis", {{"alpha", 0.2}, {"beta", 0.5}, {"gamma", 0.1}})}, triangle, kTs, 9);
+  const MatrixXd hy = sysid::actuator_output({physics_block("hysteresis", {{"alpha", 0.2}, {"beta", 0.5}, {"gamma", 0.1}})}, triangle, kTs, 9);
   EXPECT_GT(std::abs(hy(1, 0) - hy(5, 0)), 0.05);
 }
 
@@ -178,13 +171,13 @@ TEST(AugmentedModel, RejectsBadBlocks) {
   const StateSpace d = sysid::c2d_zoh(oscillator(30, 0.02), kTs);
   const sysid::AugmentedSimulator sim(d);
   const MatrixXd u = test_input(100, 7);
-  EXPECT_THROW(sim.simulate({block("magic", {})}, u), std::invalid_argument);
-  EXPECT_THROW(sim.simulate({block("deadzone", {})}, u), std::invalid_argument);
-  EXPECT_THROW(sim.simulate({block("deadzone", {{"width", -1.0}})}, u), std::invalid_argument);
-  EXPECT_THROW(sim.simulate({block("deadzone", {{"width", 1.0}}, 1)}, u), std::invalid_argument);
-  EXPECT_THROW(sim.simulate({block("missing_mode", {{"freq_hz", 5000.0}, {"damping", 0.01}, {"static_gain", 1.0}, {"velocity_gain", 0.0}})}, u),
+  EXPECT_THROW(sim.simulate({physics_block("magic", {})}, u), std::invalid_argument);
+  EXPECT_THROW(sim.simulate({physics_block("deadzone", {})}, u), std::invalid_argument);
+  EXPECT_THROW(sim.simulate({physics_block("deadzone", {{"width", -1.0}})}, u), std::invalid_argument);
+  EXPECT_THROW(sim.simulate({physics_block("deadzone", {{"width", 1.0}}, 1)}, u), std::invalid_argument);
+  EXPECT_THROW(sim.simulate({physics_block("missing_mode", {{"freq_hz", 5000.0}, {"damping", 0.01}, {"static_gain", 1.0}, {"velocity_gain", 0.0}})}, u),
                std::invalid_argument);  // above Nyquist
-  EXPECT_THROW(sim.simulate({block("time_delay", {{"delay_s", NAN}})}, u), std::invalid_argument);
+  EXPECT_THROW(sim.simulate({physics_block("time_delay", {{"delay_s", NAN}})}, u), std::invalid_argument);
   EXPECT_THROW(sim.simulate({}, MatrixXd::Zero(10, 2)), std::invalid_argument);
 }
 

@@ -13,7 +13,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "../support/random_systems.hpp"
+#include "../support/diagnose_cases.hpp"
 
 namespace {
 
@@ -24,43 +24,9 @@ using sysid::StateSpace;
 constexpr double kTs = 0.5e-3;
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
-/// Two-mode structure (25 and 34 Hz), force in, collocated position out.
-StateSpace structure() {
-  MatrixXd A = MatrixXd::Zero(4, 4), B(4, 1), C(1, 4);
-  const double w1 = kTwoPi * 25, w2 = kTwoPi * 34;
-  A(0, 1) = 1;
-  A(1, 0) = -w1 * w1;
-  A(1, 1) = -2 * 0.02 * w1;
-  A(2, 3) = 1;
-  A(3, 2) = -w2 * w2;
-  A(3, 3) = -2 * 0.015 * w2;
-  B << 0, 1, 0, 1;
-  C << 1, 0, 0.5, 0;
-  StateSpace s = sysid::c2d_zoh(StateSpace(A, B, C, MatrixXd::Zero(1, 1), 0.0), kTs);
-  s.input_names = {"u"};
-  s.output_names = {"y"};
-  return s;
-}
-
-/// Low-pass filtered noise (band about 0-60 Hz) plus a slow sine: reversals and a spread of amplitudes.
-MatrixXd excitation(Eigen::Index n, std::uint64_t seed) {
-  MatrixXd w = sysid::test::white_noise(n, 1, seed);
-  MatrixXd u(n, 1);
-  double s = 0;
-  const double a = std::exp(-kTwoPi * 60 * kTs);
-  for (Eigen::Index k = 0; k < n; ++k) {
-    s = a * s + (1 - a) * w(k, 0);
-    u(k, 0) = 1e4 * s + 300.0 * std::sin(kTwoPi * 1.3 * k * kTs);
-  }
-  return u;
-}
-
-PhysicsBlock block(const std::string& kind, std::map<std::string, double> params) {
-  PhysicsBlock b;
-  b.kind = kind;
-  b.params = std::move(params);
-  return b;
-}
+StateSpace structure() { return sysid::test::two_mode_structure(kTs); }
+MatrixXd excitation(Eigen::Index n, std::uint64_t seed) { return sysid::test::reversing_excitation(n, kTs, seed); }
+using sysid::test::physics_block;
 
 struct Case {
   sysid::AugmentedModel nominal;
@@ -93,7 +59,7 @@ TEST(Diagnose, FindsCubicStiffnessAndItsCoefficient) {
   const MatrixXd u = excitation(20000, 3);
   const double ymax = sysid::simulate(s, u).cwiseAbs().maxCoeff();
   const double k3 = 0.5 * 1e4 / (ymax * ymax * ymax);  // half the typical force at the peak
-  const Case c = make_case({block("cubic_stiffness", {{"coefficient", k3}, {"linear_coefficient", 0.0}})}, 0.03, 3);
+  const Case c = make_case({physics_block("cubic_stiffness", {{"coefficient", k3}, {"linear_coefficient", 0.0}})}, 0.03, 3);
   const sysid::DiagnoseReport r = sysid::diagnose(c.nominal, c.u, c.y);
   ASSERT_FALSE(r.findings.empty());
   EXPECT_EQ(r.findings[0].candidate.block.kind, "cubic_stiffness") << r.findings[0].summary;
@@ -105,7 +71,7 @@ TEST(Diagnose, FindsAHumBelowTheNoise) {
   const Case clean = make_case({}, 0.0, 4);
   const double rms = std::sqrt(clean.y.squaredNorm() / clean.y.size());
   const double noise = 0.08, amplitude = 0.8 * noise * rms * std::sqrt(2.0);  // hum RMS = 0.8 noise RMS
-  const Case c = make_case({block("periodic_disturbance", {{"freq_hz", 50.0}, {"amplitude", amplitude}, {"phase_rad", 1.0}})},
+  const Case c = make_case({physics_block("periodic_disturbance", {{"freq_hz", 50.0}, {"amplitude", amplitude}, {"phase_rad", 1.0}})},
                            noise, 4);
   const sysid::DiagnoseReport r = sysid::diagnose(c.nominal, c.u, c.y);
   ASSERT_FALSE(r.findings.empty());
@@ -121,9 +87,9 @@ TEST(CandidateFit, RecoversADeadZoneFromAPoorStart) {
   const MatrixXd u = excitation(6000, 5);
   const double width = 0.3 * std::sqrt(u.squaredNorm() / u.size());
   const sysid::AugmentedSimulator sim(s);
-  const MatrixXd y = sim.simulate({block("deadzone", {{"width", width}})}, u);
+  const MatrixXd y = sim.simulate({physics_block("deadzone", {{"width", width}})}, u);
   sysid::Candidate c;
-  c.block = block("deadzone", {{"width", 0.5 * width}});
+  c.block = physics_block("deadzone", {{"width", 0.5 * width}});
   c.free = {{"width", 0.0, 4 * width}};
   const auto r = sysid::fit_candidates(sim, {}, {c}, u, y, 6000);
   EXPECT_NEAR(r.fitted[0].block.param("width") / width, 1.0, 1e-3);

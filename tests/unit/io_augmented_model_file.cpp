@@ -20,6 +20,8 @@
 
 #include <sysid/core/errors.hpp>
 
+#include "../support/diagnose_cases.hpp"
+
 namespace {
 
 using Eigen::MatrixXd;
@@ -50,14 +52,7 @@ StateSpace modal(const std::vector<std::pair<double, double>>& modes, Eigen::Ind
   return StateSpace(A, B, C, MatrixXd::Zero(l, m), kTs);
 }
 
-PhysicsBlock block(const std::string& kind, std::map<std::string, double> params, long input = 0, long output = 0) {
-  PhysicsBlock b;
-  b.kind = kind;
-  b.params = std::move(params);
-  b.input = input;
-  b.output = output;
-  return b;
-}
+using sysid::test::physics_block;
 
 /// A value with a full 53-bit mantissa in [lo, hi): a round trip through text
 /// with fewer than 17 significant digits would change it.
@@ -79,20 +74,20 @@ AugmentedModel every_kind_model() {
   a.substeps = 3;
   const auto p = [&](double lo, double hi) { return awkward(rng, lo, hi); };
   a.blocks = {
-      block("missing_mode", {{"freq_hz", p(200, 250)}, {"damping", p(0.01, 0.02)}, {"static_gain", p(0.1, 0.2)},
+      physics_block("missing_mode", {{"freq_hz", p(200, 250)}, {"damping", p(0.01, 0.02)}, {"static_gain", p(0.1, 0.2)},
                              {"velocity_gain", p(0.01, 0.02)}}, 1, 0),
-      block("time_delay", {{"delay_s", p(1.2e-3, 1.8e-3)}}, 0, 0),
-      block("gain_error", {{"ratio", p(1.05, 1.1)}}, 0, 1),
-      block("input_lag", {{"corner_hz", p(80, 120)}}, 1, 1),
-      block("coulomb_friction", {{"level", p(0.01, 0.02)}, {"velocity_scale", p(0.5, 1.0)}}, 0, 0),
-      block("backlash", {{"width", p(0.05, 0.1)}}, 1, 0),
-      block("deadzone", {{"width", p(0.05, 0.1)}}, 0, 0),
-      block("saturation", {{"limit", p(1.5, 2.0)}}, 1, 1),
-      block("cubic_stiffness", {{"coefficient", p(1e-3, 2e-3)}, {"linear_coefficient", p(-1e-3, 1e-3)}}, 1, 1),
-      block("hysteresis", {{"alpha", p(0.1, 0.2)}, {"beta", p(0.2, 0.4)}, {"gamma", p(0.1, 0.2)}}, 0, 0),
-      block("periodic_disturbance", {{"freq_hz", p(49, 51)}, {"amplitude", p(0.01, 0.02)}, {"phase_rad", p(-3, 3)}}, 0, 1),
-      block("offset_drift", {{"offset", p(-0.1, 0.1)}, {"slope", p(-0.01, 0.01)}}, 0, 0),
-      block("cross_coupling", {{"gain", p(0.1, 0.3)}}, 1, 0),
+      physics_block("time_delay", {{"delay_s", p(1.2e-3, 1.8e-3)}}, 0, 0),
+      physics_block("gain_error", {{"ratio", p(1.05, 1.1)}}, 0, 1),
+      physics_block("input_lag", {{"corner_hz", p(80, 120)}}, 1, 1),
+      physics_block("coulomb_friction", {{"level", p(0.01, 0.02)}, {"velocity_scale", p(0.5, 1.0)}}, 0, 0),
+      physics_block("backlash", {{"width", p(0.05, 0.1)}}, 1, 0),
+      physics_block("deadzone", {{"width", p(0.05, 0.1)}}, 0, 0),
+      physics_block("saturation", {{"limit", p(1.5, 2.0)}}, 1, 1),
+      physics_block("cubic_stiffness", {{"coefficient", p(1e-3, 2e-3)}, {"linear_coefficient", p(-1e-3, 1e-3)}}, 1, 1),
+      physics_block("hysteresis", {{"alpha", p(0.1, 0.2)}, {"beta", p(0.2, 0.4)}, {"gamma", p(0.1, 0.2)}}, 0, 0),
+      physics_block("periodic_disturbance", {{"freq_hz", p(49, 51)}, {"amplitude", p(0.01, 0.02)}, {"phase_rad", p(-3, 3)}}, 0, 1),
+      physics_block("offset_drift", {{"offset", p(-0.1, 0.1)}, {"slope", p(-0.01, 0.01)}}, 0, 0),
+      physics_block("cross_coupling", {{"gain", p(0.1, 0.3)}}, 1, 0),
   };
   return a;
 }
@@ -115,8 +110,8 @@ json three_block_json() {
   a.nominal = modal({{40.0, 0.03}}, 1, 1);
   a.nominal.input_names = {"u"};
   a.nominal.output_names = {"y"};
-  a.blocks = {block("time_delay", {{"delay_s", 2e-3}}), block("gain_error", {{"ratio", 1.1}}),
-              block("deadzone", {{"width", 0.2}})};
+  a.blocks = {physics_block("time_delay", {{"delay_s", 2e-3}}), physics_block("gain_error", {{"ratio", 1.1}}),
+              physics_block("deadzone", {{"width", 0.2}})};
   return json::parse(sysid::model_to_json_string(sysid::augmented_model_to_file(a)));
 }
 
@@ -172,7 +167,7 @@ TEST(AugmentedModelFile, BlocksReferToChannelsByName) {
   a.nominal = modal({{40.0, 0.03}, {95.0, 0.05}}, 2, 2);
   a.nominal.input_names = {"force", "torque"};
   a.nominal.output_names = {"pos", "angle"};
-  a.blocks = {block("deadzone", {{"width", 0.1}}, 1, 0), block("gain_error", {{"ratio", 0.9}}, 0, 1)};
+  a.blocks = {physics_block("deadzone", {{"width", 0.1}}, 1, 0), physics_block("gain_error", {{"ratio", 0.9}}, 0, 1)};
   const json j = json::parse(sysid::model_to_json_string(sysid::augmented_model_to_file(a)));
   ASSERT_TRUE(j.contains("blocks")) << j.dump(2);
   EXPECT_EQ(j["blocks"][0]["input"], "torque");
@@ -279,7 +274,7 @@ TEST(AugmentedModelFile, ReportHasTheDesignKeysAndUnits) {
   const Eigen::Index N = 4000;
   const MatrixXd u = test_input(N, 1, 11, 1.0);
   const sysid::AugmentedSimulator truth(nominal.nominal);
-  MatrixXd y = truth.simulate({block("gain_error", {{"ratio", 1.1}})}, u);
+  MatrixXd y = truth.simulate({physics_block("gain_error", {{"ratio", 1.1}})}, u);
   const double rms = std::sqrt(y.squaredNorm() / static_cast<double>(N));
   y += test_input(N, 1, 12, 0.01 * rms);  // 1 % noise
 
