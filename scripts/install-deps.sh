@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config
-  libeigen3-dev libsuitesparse-dev libnlopt-cxx-dev libcli11-dev
+  libeigen3-dev libsuitesparse-dev libspectra-dev libnlopt-cxx-dev libcli11-dev
   nlohmann-json3-dev libfast-float-dev googletest libgtest-dev libbenchmark-dev
   gnuplot-nox
 )

@@ -384,10 +384,9 @@ std::string model_to_json_string(const ModelFile& f) {
   return out;
 }
 
-ModelFile model_from_json_string(const std::string& text, const std::string& source_name) {
-  json root;
+nlohmann::json parse_json_text(const std::string& text, const std::string& source_name) {
   try {
-    root = json::parse(text);
+    return json::parse(text);
   } catch (const json::parse_error& e) {
     const auto [line, column] = line_column(text, e.byte);
     // nlohmann's text is "[json.exception.parse_error.101] parse error at line L,
@@ -403,6 +402,10 @@ ModelFile model_from_json_string(const std::string& text, const std::string& sou
     if (pos != std::string::npos) reason = reason.substr(pos + 2);
     throw DataError(source_name, 0, 0, "invalid JSON: " + reason);
   }
+}
+
+ModelFile model_from_json_string(const std::string& text, const std::string& source_name) {
+  const json root = parse_json_text(text, source_name);
   try {
     return model_from_root(root);
   } catch (const DataError& e) {

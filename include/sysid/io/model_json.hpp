@@ -61,6 +61,11 @@ std::string model_to_json_string(const ModelFile& file);
 /// model whose dimensions do not fit together.
 ModelFile model_from_json_string(const std::string& text, const std::string& source_name);
 
+/// Purpose: parse JSON text for any sysid file reader. Errors: sysid::DataError
+/// naming `source_name` and the 1-based line:column of a syntax error (nlohmann
+/// reports a byte offset), or no position for e.g. a number overflow.
+nlohmann::json parse_json_text(const std::string& text, const std::string& source_name);
+
 /// read_whole_file + model_from_json_string (DataError also for an unreadable file).
 ModelFile read_model_json(const std::string& path);
 
