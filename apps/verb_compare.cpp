@@ -1,9 +1,12 @@
 // sysid compare: fit % of a model on a log, by simulation or k-step prediction.
+#include <sysid/fem/sparse_frf.hpp>
 #include <sysid/io/atomic_file.hpp>
+#include <sysid/io/fem_model_file.hpp>
 #include <sysid/validate/compare.hpp>
 #include <sysid/validate/frequency_compare.hpp>
 
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <numbers>
 
@@ -23,6 +26,7 @@ struct CompareArgs {
   std::string band;  ///< LO:HI: frequency-domain comparison against the data's H1
   Eigen::Index nfft = 1024;
   std::string plot;
+  std::string fem_path;  ///< --fem: a finite-element model compared in the band (no time-domain fit)
 };
 
 /// Outputs drawn in the time-series plot at most.
@@ -32,7 +36,7 @@ constexpr Eigen::Index kMaxPlotPairs = 4;
 
 /// Time-series overlay (measured vs model) per output, and with the band the Bode
 /// overlay of the model and the data's estimate.
-void plot_compare(const CompareArgs& a, const LoadedLog& log, const CompareResult& r, const std::vector<std::string>& inputs,
+void plot_compare(const CompareArgs& a, const LoadedLog& log, const CompareResult* r, const std::vector<std::string>& inputs,
                   const std::vector<std::string>& outputs, const FrequencyCompareResult* fc, const std::string& how) {
   const Experiment& e = log.data.experiments.front();
   const Eigen::Index n = e.samples(), stride = plot_stride(n);
@@ -41,10 +45,11 @@ void plot_compare(const CompareArgs& a, const LoadedLog& log, const CompareResul
   for (Eigen::Index k = 0; k < np; ++k)
     t(k) = log.time.size() == n ? log.time(k * stride) : static_cast<double>(k * stride) * log.data.Ts;
   PlotFigure fig;
-  fig.title = a.model_path + " on " + a.log_path + " (" + how + (stride > 1 ? ", every " + std::to_string(stride) + "th sample drawn" : "") + ")";
-  for (Eigen::Index i = 0; i < std::min<Eigen::Index>(e.y.cols(), kMaxPlotOutputs); ++i) {
+  fig.title = (a.fem_path.empty() ? a.model_path : a.fem_path) + " on " + a.log_path + " (" + how +
+              (stride > 1 && r != nullptr ? ", every " + std::to_string(stride) + "th sample drawn" : "") + ")";
+  for (Eigen::Index i = 0; r != nullptr && i < std::min<Eigen::Index>(e.y.cols(), kMaxPlotOutputs); ++i) {
     PlotPanel p;
-    p.title = outputs[static_cast<std::size_t>(i)] + ": fit " + fmt(r.fit_percent(i), 4) + " %";
+    p.title = outputs[static_cast<std::size_t>(i)] + ": fit " + fmt(r->fit_percent(i), 4) + " %";
     p.xlabel = "time [s]";
     p.ylabel = outputs[static_cast<std::size_t>(i)];
     PlotCurve meas, sim;
@@ -56,7 +61,7 @@ void plot_compare(const CompareArgs& a, const LoadedLog& log, const CompareResul
     sim.y.resize(np);
     for (Eigen::Index k = 0; k < np; ++k) {
       meas.y(k) = e.y(k * stride, i);
-      sim.y(k) = r.y_hat(k * stride, i);
+      sim.y(k) = r->y_hat(k * stride, i);
     }
     p.curves = {meas, sim};
     fig.panels.push_back(std::move(p));
@@ -99,7 +104,76 @@ void plot_compare(const CompareArgs& a, const LoadedLog& log, const CompareResul
   write_plot(fig, a.plot, "compare");
 }
 
+void print_frequency_compare(const FrequencyCompareResult& fc, const std::vector<std::string>& inputs,
+                             const std::vector<std::string>& outputs) {
+  std::cout << "in-band FRF error of the model against the data's H1 (" << fmt(fc.f_lo_hz) << ".." << fmt(fc.f_hi_hz)
+            << " Hz, " << fc.bins_in_band << " frequencies, nfft " << fc.data_frf.nfft
+            << "; relative, coherence-weighted; 0 = perfect):\n";
+  for (const auto& p : fc.pairs)
+    std::cout << "  " << outputs[static_cast<std::size_t>(p.output)] << " <- " << inputs[static_cast<std::size_t>(p.input)]
+              << ": " << fmt(p.relative_error, 3) << " (noise floor " << fmt(p.noise_floor, 2) << "), worst mismatch at "
+              << fmt(p.worst_freq_hz, 5) << " Hz (" << fmt(p.worst_mismatch, 3) << "), mean coherence "
+              << fmt(p.mean_coherence, 3) << "\n";
+  for (const auto& w : fc.warnings) warn("compare", w);
+}
+
+/// --fem: the FE model's response by sparse solves (continuous time) against the
+/// log's H1 in the band; channels default to the FE model's force and output names.
+void run_fem_compare(const CompareArgs& a) {
+  if (a.band.empty()) throw CLI::ValidationError("--band", "--fem compares frequency responses: give --band LO:HI");
+  if (a.predict > 0) throw CLI::ValidationError("--predict", "an FE model has no noise model to predict with");
+  if (!a.plot.empty()) refuse_to_overwrite_input(a.plot, {a.fem_path, a.log_path});
+  const auto [lo, hi] = parse_range(a.band, "--band");
+  if (lo < 0.0) throw CLI::ValidationError("--band", "need LO >= 0, found '" + a.band + "'");
+  const fem::SecondOrderModel model = read_fem_model(a.fem_path);
+  std::vector<std::string> inputs = split_names(a.log.inputs, "--inputs"), outputs = split_names(a.log.outputs, "--outputs");
+  if (inputs.empty())
+    for (const auto& in : model.inputs) inputs.push_back(in.name);
+  if (outputs.empty())
+    for (const auto& out : model.outputs) outputs.push_back(out.name);
+  if (inputs.size() != model.inputs.size() || outputs.size() != model.outputs.size())
+    throw CLI::ValidationError("--inputs/--outputs", "the FE model " + a.fem_path + " has " +
+                                                         std::to_string(model.inputs.size()) + " input(s) and " +
+                                                         std::to_string(model.outputs.size()) + " output(s)");
+  const LoadedLog log = load_log(a.log_path, make_log_options(a.log, inputs, outputs));
+  FrequencyCompareOptions fo;
+  fo.frf.welch.nfft = a.nfft;
+  fo.f_lo_hz = lo;
+  fo.f_hi_hz = hi;
+  std::vector<std::string> fe_warnings;
+  // Only the band's frequencies are solved; the rest are NaN and skipped.
+  const auto response = [&](const Eigen::VectorXd& f) {
+    std::vector<Eigen::Index> in_band;
+    for (Eigen::Index k = 0; k < f.size(); ++k)
+      if (f(k) >= lo && f(k) <= hi) in_band.push_back(k);
+    Eigen::VectorXd fb(static_cast<Eigen::Index>(in_band.size()));
+    for (std::size_t q = 0; q < in_band.size(); ++q) fb(static_cast<Eigen::Index>(q)) = f(in_band[q]);
+    const fem::SparseFrfResult r = fem::sparse_frf(model, fb);
+    fe_warnings = r.warnings;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    std::vector<Eigen::MatrixXcd> h(static_cast<std::size_t>(f.size()),
+                                    Eigen::MatrixXcd::Constant(static_cast<Eigen::Index>(outputs.size()),
+                                                               static_cast<Eigen::Index>(inputs.size()), {nan, nan}));
+    for (std::size_t q = 0; q < in_band.size(); ++q) h[static_cast<std::size_t>(in_band[q])] = r.H[q];
+    return h;
+  };
+  const FrequencyCompareResult fc = frequency_compare_response(response, log.data, fo);
+  std::cout << "FE model " << a.fem_path << " (" << model.dofs() << " DOFs, sparse solves) on " << a.log_path << "\n";
+  for (const auto& w : fe_warnings) warn("compare", w);
+  print_frequency_compare(fc, inputs, outputs);
+  if (!a.plot.empty()) plot_compare(a, log, nullptr, inputs, outputs, &fc, "frequency response");
+}
+
 void run_compare(const CompareArgs& a) {
+  if (!a.fem_path.empty()) {
+    CompareArgs fe = a;
+    // One positional given: it is the log (CLI11 fills "model" first).
+    if (fe.log_path.empty()) std::swap(fe.model_path, fe.log_path);
+    if (!fe.model_path.empty()) throw CLI::ValidationError("--fem", "give either a model file or --fem MODEL.json, not both");
+    run_fem_compare(fe);
+    return;
+  }
+  if (a.log_path.empty()) throw CLI::ValidationError("log", "give the model file and the CSV log");
   const std::string verb = "compare";
   if (!a.plot.empty()) refuse_to_overwrite_input(a.plot, {a.model_path, a.log_path});
   std::optional<std::pair<double, double>> band;
@@ -131,17 +205,9 @@ void run_compare(const CompareArgs& a) {
     fo.f_lo_hz = band->first;
     fo.f_hi_hz = band->second;
     fc = frequency_compare(model, log.data, fo);
-    std::cout << "in-band FRF error of the model against the data's H1 (" << fmt(fc->f_lo_hz) << ".." << fmt(fc->f_hi_hz)
-              << " Hz, " << fc->bins_in_band << " frequencies, nfft " << fc->data_frf.nfft
-              << "; relative, coherence-weighted; 0 = perfect):\n";
-    for (const auto& p : fc->pairs)
-      std::cout << "  " << outputs[static_cast<std::size_t>(p.output)] << " <- " << inputs[static_cast<std::size_t>(p.input)]
-                << ": " << fmt(p.relative_error, 3) << " (noise floor " << fmt(p.noise_floor, 2) << "), worst mismatch at "
-                << fmt(p.worst_freq_hz, 5) << " Hz (" << fmt(p.worst_mismatch, 3) << "), mean coherence "
-                << fmt(p.mean_coherence, 3) << "\n";
-    for (const auto& w : fc->warnings) warn(verb, w);
+    print_frequency_compare(*fc, inputs, outputs);
   }
-  if (!a.plot.empty()) plot_compare(a, log, r, inputs, outputs, fc ? &*fc : nullptr, how);
+  if (!a.plot.empty()) plot_compare(a, log, &r, inputs, outputs, fc ? &*fc : nullptr, how);
 }
 
 }  // namespace
@@ -149,8 +215,8 @@ void run_compare(const CompareArgs& a) {
 Verb register_compare(CLI::App& app) {
   auto args = std::make_shared<CompareArgs>();
   CLI::App* cmd = app.add_subcommand("compare", "Fit % of a model on a log (simulation, or k-step-ahead prediction)");
-  cmd->add_option("model", args->model_path, "model file (JSON)")->required();
-  cmd->add_option("log", args->log_path, "CSV log with the input and output columns")->required();
+  cmd->add_option("model", args->model_path, "model file (JSON); with --fem omit it")->required();
+  cmd->add_option("log", args->log_path, "CSV log with the input and output columns");
   LogOptionSpec spec;
   spec.inputs_required = false;
   spec.outputs_required = false;
@@ -172,6 +238,9 @@ Verb register_compare(CLI::App& app) {
   cmd->add_option("--plot", args->plot,
                   "measured vs model output over time; with --band also the Bode overlay (.svg or .png; needs gnuplot)")
       ->check(plot_path_validator());
+  cmd->add_option("--fem", args->fem_path,
+                  "finite-element model (JSON naming Matrix Market M, K, C and the force/output DOFs) compared with the "
+                  "log's H1 over --band by sparse solves");
   cmd->footer(
       "Fit % = 100 (1 - |y - y_hat| / |y - mean(y)|) per output; 100 is perfect, 0 is as good as the mean.\n"
       "--band: per output-input pair, sqrt(sum g |G - H|^2 / sum g |H|^2) over the band's frequencies,\n"
@@ -180,7 +249,8 @@ Verb register_compare(CLI::App& app) {
       "Example:\n"
       "  sysid compare model.json fresh.csv --inputs u --outputs y\n"
       "  sysid compare model.json fresh.csv --predict 10\n"
-      "  sysid compare model.json fresh.csv --band 0:100 --nfft 4096 --plot compare.svg");
+      "  sysid compare model.json fresh.csv --band 0:100 --nfft 4096 --plot compare.svg\n"
+      "  sysid compare --fem beam.json measured.csv --band 5:400 --nfft 4096");
   return {cmd, [args] { run_compare(*args); }};
 }
 

@@ -1,7 +1,9 @@
 // sysid frf: non-parametric frequency response (H1/H2) with coherence and
 // confidence bounds, written as the DESIGN.md frequency-response CSV.
 #include <sysid/io/atomic_file.hpp>
+#include <sysid/fem/sparse_frf.hpp>
 #include <sysid/io/csv.hpp>
+#include <sysid/io/fem_model_file.hpp>
 #include <sysid/spectral/frf.hpp>
 
 #include <cmath>
@@ -27,13 +29,88 @@ struct FrfArgs {
   std::string estimator = "h1";
   double confidence = 0.95;
   std::string out, plot;
+  // --fem: the response of a finite-element model instead of an estimate from a log.
+  std::string fem_path;
+  std::string band;  ///< LO:HI Hz of the FE frequency grid
+  Eigen::Index points = 500;
+  std::string spacing = "linear";
 };
 
 double db(double a) { return 20.0 * std::log10(a); }  // 0 -> -inf, inf -> inf: written as such
 
+/// The FE model's response by sparse solves (fem/sparse_frf.hpp) on a grid over
+/// --band, written with the columns of DESIGN.md (no coherence: nothing is estimated).
+void run_fem_frf(const FrfArgs& a) {
+  const std::string verb = "frf";
+  if (a.band.empty()) throw CLI::ValidationError("--band", "--fem needs the frequency band LO:HI in Hz");
+  if (!a.out.empty()) refuse_to_overwrite_input(a.out, {a.fem_path});
+  if (!a.plot.empty()) refuse_to_overwrite_input(a.plot, {a.fem_path});
+  const auto [lo, hi] = parse_range(a.band, "--band");
+  if (lo < 0.0 || (a.spacing == "log" && lo <= 0.0))
+    throw CLI::ValidationError("--band", "need LO >= 0 (LO > 0 with --spacing log), found '" + a.band + "'");
+  const fem::SecondOrderModel model = read_fem_model(a.fem_path);
+  Eigen::VectorXd f = Eigen::VectorXd::LinSpaced(a.points, lo, hi);
+  if (a.spacing == "log") f = Eigen::VectorXd::LinSpaced(a.points, std::log10(lo), std::log10(hi)).unaryExpr([](double e) {
+    return std::pow(10.0, e);
+  });
+  const fem::SparseFrfResult r = fem::sparse_frf(model, f);
+  std::cout << "frequency response of " << a.fem_path << " (" << model.dofs() << " DOFs, " << model.inputs.size()
+            << " input(s), " << model.outputs.size() << " output(s)) at " << f.size() << " frequencies, " << fmt(lo)
+            << ".." << fmt(hi) << " Hz: " << r.symbolic_factorisations << " symbolic analysis, "
+            << r.numeric_factorisations << " numeric factorisations; smallest reciprocal condition " << fmt(r.min_rcond, 3)
+            << " at " << fmt(r.min_rcond_freq_hz) << " Hz\n";
+  for (const auto& w : r.warnings) warn(verb, w);
+  const auto l = static_cast<Eigen::Index>(r.output_names.size()), m = static_cast<Eigen::Index>(r.input_names.size());
+  const double to_deg = 180.0 / std::numbers::pi;
+  if (!a.out.empty()) {
+    std::vector<std::string> names{"f_hz"};
+    for (Eigen::Index i = 0; i < l; ++i)
+      for (Eigen::Index j = 0; j < m; ++j) {
+        const std::string s = "_" + r.output_names[static_cast<std::size_t>(i)] + "_" + r.input_names[static_cast<std::size_t>(j)];
+        for (const char* p : {"re", "im", "mag_db", "phase_deg"}) names.push_back(p + s);
+      }
+    Eigen::MatrixXd table(f.size(), 1 + 4 * l * m);
+    for (Eigen::Index k = 0; k < f.size(); ++k) {
+      table(k, 0) = f(k);
+      Eigen::Index c = 1;
+      for (Eigen::Index i = 0; i < l; ++i)
+        for (Eigen::Index j = 0; j < m; ++j, c += 4) {
+          const std::complex<double> h = r.H[static_cast<std::size_t>(k)](i, j);
+          table.row(k).segment(c, 4) << h.real(), h.imag(), db(std::abs(h)), std::arg(h) * to_deg;
+        }
+    }
+    write_csv(a.out, names, table);
+    note(verb, "wrote " + std::to_string(f.size()) + " frequencies x " + std::to_string(l * m) + " pair(s) to " + a.out);
+  }
+  if (!a.plot.empty()) {
+    std::vector<BodeCurve> curves;
+    for (Eigen::Index i = 0; i < l && static_cast<Eigen::Index>(curves.size()) < kMaxPlotPairs; ++i)
+      for (Eigen::Index j = 0; j < m && static_cast<Eigen::Index>(curves.size()) < kMaxPlotPairs; ++j) {
+        BodeCurve b;
+        b.title = r.output_names[static_cast<std::size_t>(i)] + " <- " + r.input_names[static_cast<std::size_t>(j)];
+        b.f = f;
+        b.h.resize(f.size());
+        for (Eigen::Index k = 0; k < f.size(); ++k) b.h(k) = r.H[static_cast<std::size_t>(k)](i, j);
+        curves.push_back(std::move(b));
+      }
+    PlotFigure fig;
+    fig.title = "FE model " + a.fem_path + " (" + std::to_string(model.dofs()) + " DOFs, sparse solves)";
+    fig.panels = bode_panels(curves, "");
+    write_plot(fig, a.plot, verb);
+  }
+}
+
 void run_frf(const FrfArgs& a) {
   const std::string verb = "frf";
   if (a.out.empty() && a.plot.empty()) throw CLI::ValidationError("--out/--plot", "give --out FILE.csv and/or --plot FILE.svg");
+  if (!a.fem_path.empty()) {
+    if (!a.log_path.empty()) throw CLI::ValidationError("--fem", "give either a log or --fem MODEL.json, not both");
+    run_fem_frf(a);
+    return;
+  }
+  if (a.log_path.empty()) throw CLI::ValidationError("log", "give the CSV log (or --fem MODEL.json)");
+  if (a.log.inputs.empty() || a.log.outputs.empty())
+    throw CLI::ValidationError("--inputs/--outputs", "an estimate from a log needs --inputs and --outputs");
   if (!a.out.empty()) refuse_to_overwrite_input(a.out, {a.log_path});
   if (!a.plot.empty()) refuse_to_overwrite_input(a.plot, {a.log_path});
   const std::vector<std::string> inputs = split_names(a.log.inputs, "--inputs");
@@ -136,8 +213,11 @@ Verb register_frf(CLI::App& app) {
   auto args = std::make_shared<FrfArgs>();
   CLI::App* cmd = app.add_subcommand(
       "frf", "Non-parametric frequency response (H1/H2) with coherence and confidence bounds, as CSV (and a Bode plot)");
-  cmd->add_option("log", args->log_path, "CSV log with the input and output columns")->required();
-  add_log_options(*cmd, args->log, {});
+  cmd->add_option("log", args->log_path, "CSV log with the input and output columns (not with --fem)");
+  LogOptionSpec spec;
+  spec.inputs_required = false;
+  spec.outputs_required = false;
+  add_log_options(*cmd, args->log, spec);
   add_welch_options(*cmd, args->welch);
   cmd->add_option("--estimator", args->estimator, "h1 (noise on the outputs) or h2 (noise on the inputs)")
       ->capture_default_str()
@@ -148,6 +228,16 @@ Verb register_frf(CLI::App& app) {
   cmd->add_option("--out", args->out, "frequency-response CSV file (one row per frequency)");
   cmd->add_option("--plot", args->plot, "Bode magnitude and phase with the confidence band, and coherence (.svg or .png; needs gnuplot)")
       ->check(plot_path_validator());
+  cmd->add_option("--fem", args->fem_path,
+                  "finite-element model (JSON naming Matrix Market M, K, C and the force/output DOFs): its response "
+                  "by sparse solves instead of an estimate from a log");
+  cmd->add_option("--band", args->band, "with --fem: frequency band LO:HI in Hz")->check(range_validator());
+  cmd->add_option("--points", args->points, "with --fem: number of frequencies in the band")
+      ->capture_default_str()
+      ->check(CLI::Range(Eigen::Index{1}, Eigen::Index{10000000}));
+  cmd->add_option("--spacing", args->spacing, "with --fem: linear or log frequency grid")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"linear", "log"}));
   cmd->footer(
       "Columns: f_hz, then for each output y and input u: re_<y>_<u>, im_<y>_<u>, mag_db_<y>_<u>,\n"
       "phase_deg_<y>_<u> (wrapped to +-180), coh_<y>_<u> (ordinary coherence), and the confidence\n"
@@ -155,7 +245,11 @@ Verb register_frf(CLI::App& app) {
       "(Bendat & Piersol random error; -inf/inf where no bound can be given).\n"
       "With several inputs all must be excited independently in the log (H = G_yu G_uu^-1).\n"
       "Example:\n"
-      "  sysid frf par2_gu.csv --inputs u --outputs y --nfft 4096 --out frf.csv --plot frf.svg");
+      "With --fem the columns are re, im, mag_db, phase_deg per pair (exact response, no coherence or bounds);\n"
+      "one symbolic factorisation serves every frequency.\n"
+      "Examples:\n"
+      "  sysid frf par2_gu.csv --inputs u --outputs y --nfft 4096 --out frf.csv --plot frf.svg\n"
+      "  sysid frf --fem beam.json --band 1:500 --points 2000 --out beam_frf.csv");
   return {cmd, [args] { run_frf(*args); }};
 }
 

@@ -76,10 +76,28 @@ struct FrequencyCompareResult {
 /// Warnings: band pairs whose mean coherence is below 0.5 (the error is then mostly
 /// noise), and those of frf().
 /// Example: `auto r = frequency_compare(model, data, {.f_lo_hz = 0, .f_hi_hz = 100});`
+/// Purpose: the same comparison for any model given by its frequency response:
+/// `model_response(freq_hz)` returns one outputs x inputs matrix per frequency
+/// (e.g. a finite-element model's sparse solves, fem/sparse_frf.hpp). NaN entries
+/// (frequencies where the model has no finite response) are skipped like
+/// undefined estimates.
+/// Preconditions (std::invalid_argument): the response has data.outputs() x
+/// data.inputs() entries per frequency; 0 <= f_lo < f_hi; at least one bin in the band.
+template <class ResponseAt>
+FrequencyCompareResult frequency_compare_response(ResponseAt&& model_response, const IoData& data,
+                                                  const FrequencyCompareOptions& options = {});
+
+/// Purpose: model FRF against the non-parametric FRF of `data` in a band (file comment).
+/// Preconditions (std::invalid_argument): model discrete with Ts equal to data.Ts
+/// (relative 1e-6), or continuous (Ts = 0; evaluated at s = j 2 pi f); model inputs ==
+/// data inputs and outputs == data outputs; 0 <= f_lo < f_hi; at least one bin in the
+/// band (below fs/2); frf() preconditions.
+/// Warnings: band pairs whose mean coherence is below 0.5 (the error is then mostly
+/// noise), and those of frf().
+/// Example: `auto r = frequency_compare(model, data, {.f_lo_hz = 0, .f_hi_hz = 100});`
 inline FrequencyCompareResult frequency_compare(const StateSpace& model, const IoData& data,
                                                 const FrequencyCompareOptions& options = {}) {
   const std::string who = "frequency_compare";
-  data.validate();
   model.validate();
   if (model.inputs() != data.inputs() || model.outputs() != data.outputs())
     throw std::invalid_argument(who + ": need model inputs == data inputs and model outputs == data outputs (model " +
@@ -88,6 +106,14 @@ inline FrequencyCompareResult frequency_compare(const StateSpace& model, const I
   if (model.is_discrete() && std::abs(model.Ts - data.Ts) > 1e-6 * data.Ts)
     throw std::invalid_argument(who + ": need model Ts == data Ts (" + std::to_string(model.Ts) + " vs " +
                                 std::to_string(data.Ts) + ")");
+  return frequency_compare_response([&](const Eigen::VectorXd& f) { return frequency_response(model, f); }, data, options);
+}
+
+template <class ResponseAt>
+FrequencyCompareResult frequency_compare_response(ResponseAt&& model_response, const IoData& data,
+                                                  const FrequencyCompareOptions& options) {
+  const std::string who = "frequency_compare";
+  data.validate();
   if (!(options.f_lo_hz >= 0.0) || !(options.f_hi_hz > options.f_lo_hz))
     throw std::invalid_argument(who + ": need 0 <= f_lo < f_hi");
 
@@ -95,7 +121,11 @@ inline FrequencyCompareResult frequency_compare(const StateSpace& model, const I
   r.data_frf = frf(data, options.frf);
   r.warnings = r.data_frf.warnings;
   const FrfResult& h = r.data_frf;
-  r.model_frf = frequency_response(model, h.freq_hz);
+  r.model_frf = model_response(h.freq_hz);
+  if (r.model_frf.size() != static_cast<std::size_t>(h.freq_hz.size()) ||
+      (!r.model_frf.empty() && (r.model_frf.front().rows() != data.outputs() || r.model_frf.front().cols() != data.inputs())))
+    throw std::invalid_argument(who + ": the model response needs one " + std::to_string(data.outputs()) + " x " +
+                                std::to_string(data.inputs()) + " matrix per frequency");
   r.f_lo_hz = options.f_lo_hz;
   r.f_hi_hz = std::min(options.f_hi_hz, 0.5 / data.Ts);
 
@@ -117,7 +147,7 @@ inline FrequencyCompareResult frequency_compare(const StateSpace& model, const I
         const auto b = static_cast<std::size_t>(k);
         const std::complex<double> H = h.H[b](i, j), G = r.model_frf[b](i, j);
         const double w = h.coherence[b](i, j);
-        if (!std::isfinite(std::abs(H)) || !std::isfinite(w)) continue;
+        if (!std::isfinite(std::abs(H)) || !std::isfinite(w) || !std::isfinite(std::abs(G))) continue;
         ++used;
         const double d2 = std::norm(G - H), h2 = std::norm(H);
         num += w * d2;
