@@ -30,9 +30,14 @@ void check_parameters(const PhysicsBlock& b, double Ts) {
     const double v = b.param(name);
     if (!std::isfinite(v)) throw std::invalid_argument(b.kind + ": parameter " + name + " is not finite");
   }
-  if (is_kind(b, "missing_mode")) {
+  if (is_kind(b, "missing_mode") || is_kind(b, "mode_shift")) {
     require(b.param("freq_hz") > 0.0 && b.param("freq_hz") < 0.5 / Ts, b, "freq_hz", "in (0, Nyquist)");
     require(b.param("damping") > 0.0, b, "damping", "> 0");
+    if (is_kind(b, "mode_shift")) {
+      require(b.param("nominal_freq_hz") > 0.0 && b.param("nominal_freq_hz") < 0.5 / Ts, b, "nominal_freq_hz",
+              "in (0, Nyquist)");
+      require(b.param("nominal_damping") > 0.0, b, "nominal_damping", "> 0");
+    }
   } else if (is_kind(b, "time_delay")) {
     require(b.param("delay_s") >= 0.0, b, "delay_s", ">= 0");
   } else if (is_kind(b, "input_lag")) {
@@ -108,14 +113,16 @@ struct ModeState {
   }
 };
 
-ModeState make_mode(const PhysicsBlock& b, double h) {
+/// A parallel mode (static_gain w^2 + velocity_gain w s) / (s^2 + 2 zeta w s + w^2).
+ModeState make_mode(long input, long output, double freq_hz, double zeta, double static_gain, double velocity_gain,
+                    double h) {
   ModeState m;
-  m.input = b.input;
-  m.output = b.output;
-  m.omega = kTwoPi * b.param("freq_hz");
-  m.zeta = b.param("damping");
-  m.static_gain = b.param("static_gain");
-  m.velocity_gain = b.param("velocity_gain");
+  m.input = input;
+  m.output = output;
+  m.omega = kTwoPi * freq_hz;
+  m.zeta = zeta;
+  m.static_gain = static_gain;
+  m.velocity_gain = velocity_gain;
   StateSpace c(Eigen::Matrix2d{{0.0, 1.0}, {-m.omega * m.omega, -2.0 * m.zeta * m.omega}}, Eigen::Vector2d(0.0, 1.0),
                Eigen::RowVector2d(1.0, 0.0), Eigen::MatrixXd::Zero(1, 1), 0.0);
   const StateSpace d = c2d_zoh(c, h);
@@ -222,7 +229,19 @@ Eigen::MatrixXd AugmentedSimulator::simulate(const std::vector<PhysicsBlock>& bl
     std::vector<LagState> lags;
     std::vector<FeedbackForce> feedback;
     for (const auto& b : blocks) {
-      if (is_kind(b, "missing_mode")) modes.push_back(make_mode(b, h));
+      if (is_kind(b, "missing_mode"))
+        modes.push_back(make_mode(b.input, b.output, b.param("freq_hz"), b.param("damping"), b.param("static_gain"),
+                                  b.param("velocity_gain"), h));
+      if (is_kind(b, "mode_shift")) {
+        // The nominal mode (numerator b1 s + b0) out, the same numerator over the
+        // moved denominator in: static_gain = b0 / w^2, velocity_gain = b1 / w.
+        const double b0 = b.param("numerator_b0"), b1 = b.param("numerator_b1");
+        const double w_old = kTwoPi * b.param("nominal_freq_hz"), w_new = kTwoPi * b.param("freq_hz");
+        modes.push_back(make_mode(b.input, b.output, b.param("nominal_freq_hz"), b.param("nominal_damping"),
+                                  -b0 / (w_old * w_old), -b1 / w_old, h));
+        modes.push_back(make_mode(b.input, b.output, b.param("freq_hz"), b.param("damping"), b0 / (w_new * w_new),
+                                  b1 / w_new, h));
+      }
       if (is_kind(b, "input_lag")) {
         const double w = kTwoPi * b.param("corner_hz");
         const double a = std::exp(-w * h);

@@ -119,12 +119,12 @@ void check_arguments(const AugmentedModel& nominal, const Eigen::Ref<const Eigen
 
 /// The falsified band or residual peak a block explains, for the report's location.
 std::optional<std::pair<double, double>> band_of(const PhysicsBlock& b, const MismatchLocation& loc) {
-  if (b.kind != "missing_mode" && b.kind != "periodic_disturbance") return std::nullopt;
+  if (b.kind != "missing_mode" && b.kind != "periodic_disturbance" && b.kind != "mode_shift") return std::nullopt;
   const double f = b.param("freq_hz");
   if (b.output < static_cast<long>(loc.outputs.size()))
     for (const auto& band : loc.outputs[b.output].bands)
       if (band.lo_hz <= f * 1.02 && f <= band.hi_hz * 1.02) return std::make_pair(band.lo_hz, band.hi_hz);
-  const double halfwidth = b.kind == "missing_mode" ? std::max(3.0 * b.param("damping") * f, 0.5) : 0.5;
+  const double halfwidth = b.kind != "periodic_disturbance" ? std::max(3.0 * b.param("damping") * f, 0.5) : 0.5;
   return std::make_pair(f - halfwidth, f + halfwidth);
 }
 
@@ -145,6 +145,14 @@ std::string finding_summary(const PhysicsBlock& b, const std::vector<std::string
   if (k == "missing_mode")
     return "The recordings contain a lightly damped mode at " + fixed(b.param("freq_hz"), 4) + " Hz (damping " +
            fixed(b.param("damping"), 2) + ") in the path " + in + " -> " + out + " that the simulation lacks.";
+  if (k == "mode_shift") {
+    // (f / f0)^2 - 1 is the modal stiffness-to-mass ratio error the shift implies.
+    const double ratio = b.param("freq_hz") / b.param("nominal_freq_hz");
+    return "The simulation's mode at " + fixed(b.param("nominal_freq_hz"), 4) + " Hz (damping " +
+           fixed(b.param("nominal_damping"), 2) + ") is at " + fixed(b.param("freq_hz"), 4) + " Hz (damping " +
+           fixed(b.param("damping"), 2) + ") in the path " + in + " -> " + out + ": its modal stiffness-to-mass ratio is " +
+           fixed(100.0 * (ratio * ratio - 1.0), 2) + " % off (a mass or stiffness error of the model).";
+  }
   if (k == "time_delay")
     return "The response to " + in + " arrives " + fixed(b.param("delay_s") * 1e3, 3) +
            " ms later than the simulation predicts (a transport or computation delay).";

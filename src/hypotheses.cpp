@@ -292,6 +292,82 @@ void add_plant_candidates(const Context& c, long j, long i, std::vector<Candidat
   add_mode_candidates(c, j, i, out);
 }
 
+/// One lightly damped mode of the nominal in the path input j -> output i, in the
+/// form of a mode_shift block: b1 s + b0 over s^2 + 2 zeta w s + w^2.
+struct NominalMode {
+  double freq_hz = 0.0, damping = 0.0, b0 = 0.0, b1 = 0.0, peak_gain = 0.0;
+};
+
+/// The nominal's lightly damped modes (damping < 0.3, below 0.45 fs) with their
+/// numerators in the path j -> i, from the eigen-decomposition of its continuous
+/// equivalent: a pole pair p, conj(p) with residue r = (C v)_i (w^T B)_j contributes
+/// (2 Re(r) s - 2 Re(r conj(p))) / (s^2 - 2 Re(p) s + |p|^2).
+std::vector<NominalMode> nominal_modes(const Context& c, long j, long i) {
+  std::vector<NominalMode> modes;
+  const auto& continuous = c.d.simulator->continuous_equivalent();
+  if (!continuous) return modes;
+  Eigen::EigenSolver<Eigen::MatrixXd> eig(continuous->A);
+  if (eig.info() != Eigen::Success) return modes;
+  const Eigen::MatrixXcd V = eig.eigenvectors();
+  Eigen::PartialPivLU<Eigen::MatrixXcd> lu(V);
+  // A (nearly) defective A has no reliable modal residues: skip rather than guess.
+  const Eigen::JacobiSVD<Eigen::MatrixXcd> svd(V);
+  const Eigen::VectorXd sv = svd.singularValues();
+  if (!(sv(sv.size() - 1) > 1e-10 * sv(0))) return modes;
+  const Eigen::VectorXcd left = lu.solve(continuous->B.col(j).cast<std::complex<double>>());
+  const Eigen::RowVectorXcd right = continuous->C.row(i).cast<std::complex<double>>() * V;
+  for (Eigen::Index k = 0; k < V.cols(); ++k) {
+    const std::complex<double> p = eig.eigenvalues()(k);
+    if (!(p.imag() > 0.0)) continue;
+    const double w = std::abs(p), zeta = -p.real() / w, f = w / kTwoPi;
+    if (!(zeta > 0.0 && zeta < 0.3) || f >= 0.45 / c.d.Ts) continue;
+    const std::complex<double> r = right(k) * left(k);
+    NominalMode mode{f, zeta, -2.0 * (r * std::conj(p)).real(), 2.0 * r.real(), 0.0};
+    mode.peak_gain = std::abs(std::complex<double>(mode.b0, w * mode.b1)) / (2.0 * zeta * w * w);
+    modes.push_back(mode);
+  }
+  return modes;
+}
+
+/// mode_shift: each nominal mode moved in frequency on a small grid (damping kept),
+/// then in damping at the best frequency; scored by the residual energy the moved
+/// mode explains as it is (a shift is not linear in the frequency beyond a
+/// fraction of the half-power bandwidth, so no linearised score).
+void add_mode_shift_candidates(const Context& c, long j, long i, std::vector<Candidate>& out) {
+  const double f_max = 0.49 / c.d.Ts;
+  for (const NominalMode& mode : nominal_modes(c, j, i)) {
+    PhysicsBlock b = make_block("mode_shift", j, i);
+    b.params["nominal_freq_hz"] = mode.freq_hz;
+    b.params["nominal_damping"] = mode.damping;
+    b.params["numerator_b0"] = mode.b0;
+    b.params["numerator_b1"] = mode.b1;
+    b.params["damping"] = mode.damping;
+    double best_score = -1.0, best_f = mode.freq_hz, best_zeta = mode.damping;
+    for (double scale : {0.97, 0.985, 0.993, 0.997, 1.003, 1.007, 1.015, 1.03}) {
+      if (mode.freq_hz * scale >= f_max) continue;
+      b.params["freq_hz"] = mode.freq_hz * scale;
+      const double score = c.explained_as_is(c.effect(b));
+      if (score > best_score) best_score = score, best_f = mode.freq_hz * scale;
+    }
+    if (best_score < 0.0) continue;
+    b.params["freq_hz"] = best_f;
+    for (double factor : {0.6, 1.6}) {
+      b.params["damping"] = mode.damping * factor;
+      const double score = c.explained_as_is(c.effect(b));
+      if (score > best_score) best_score = score, best_zeta = mode.damping * factor;
+    }
+    b.params["damping"] = best_zeta;
+    Candidate candidate;
+    candidate.block = b;
+    candidate.free = {{"freq_hz", 0.9 * mode.freq_hz, std::min(1.1 * mode.freq_hz, f_max), true},
+                      {"damping", 0.2 * mode.damping, std::min(5.0 * mode.damping, 0.6), true}};
+    candidate.detector_score = std::max(0.0, best_score);
+    candidate.evidence = "the simulation's mode at " + std::to_string(mode.freq_hz) + " Hz moved to " +
+                         std::to_string(best_f) + " Hz explains " + percent(candidate.detector_score);
+    out.push_back(candidate);
+  }
+}
+
 void add_coupling_candidates(const Context& c, std::vector<Candidate>& out) {
   if (c.l < 2) return;
   for (long j = 0; j < std::min(c.m, c.l); ++j)
@@ -318,6 +394,13 @@ std::vector<Candidate> propose_candidates(const DetectionData& data, const Detec
     // measured (square MIMO) or on the only output (SISO/SIMO).
     for (long i = 0; i < c.l; ++i)
       if (c.l == 1 || i == j) add_plant_candidates(c, j, i, out);
+    // Modes, missing or moved, are not collocated: with a single input (SISO,
+    // SIMO) every output is a path of it. Square MIMO keeps the collocated paths
+    // (add_plant_candidates) to bound the number of candidates.
+    for (long i = 0; i < c.l; ++i) {
+      if (c.m == 1 && c.l > 1 && i != j) add_mode_candidates(c, j, i, out);
+      if (c.m == 1 || i == j) add_mode_shift_candidates(c, j, i, out);
+    }
   }
   add_coupling_candidates(c, out);
   std::stable_sort(out.begin(), out.end(),

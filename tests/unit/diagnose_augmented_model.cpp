@@ -76,6 +76,31 @@ TEST(AugmentedModel, MissingModeEqualsTheParallelConnectionDiscretisedExactly) {
   EXPECT_LT(relative_error(y, sysid::simulate(parallel, u)), 1e-9);
 }
 
+TEST(AugmentedModel, ModeShiftMovesTheNominalModeExactly) {
+  // Nominal: two modes in parallel, 25 Hz and 60 Hz, each 1 / (s^2 + 2 zeta w s + w^2)
+  // from force to position (numerator b0 = 1, b1 = 0). mode_shift moves the 60 Hz
+  // mode to 61.2 Hz with damping 0.03: the result must equal the nominal built with
+  // the moved mode, to round-off.
+  auto two_modes = [](double f2, double zeta2) {
+    const StateSpace a = oscillator(25, 0.02), b = oscillator(f2, zeta2);
+    MatrixXd A = MatrixXd::Zero(4, 4), B(4, 1), C(1, 4);
+    A.topLeftCorner(2, 2) = a.A;
+    A.bottomRightCorner(2, 2) = b.A;
+    B << a.B, b.B;
+    C << a.C, b.C;
+    return sysid::c2d_zoh(StateSpace(A, B, C, MatrixXd::Zero(1, 1), 0.0), kTs);
+  };
+  const MatrixXd u = test_input(4000, 5);
+  const sysid::AugmentedSimulator sim(two_modes(60.0, 0.02));
+  const auto shift = [](double f, double zeta) {
+    return physics_block("mode_shift", {{"freq_hz", f}, {"damping", zeta}, {"nominal_freq_hz", 60.0}, {"nominal_damping", 0.02},
+                                        {"numerator_b0", 1.0}, {"numerator_b1", 0.0}});
+  };
+  EXPECT_LT(relative_error(sim.simulate({shift(61.2, 0.03)}, u), sysid::simulate(two_modes(61.2, 0.03), u)), 1e-9);
+  // Not moved: the nominal itself (the removed and the added mode cancel).
+  EXPECT_LT(relative_error(sim.simulate({shift(60.0, 0.02)}, u), sysid::simulate(two_modes(60.0, 0.02), u)), 1e-12);
+}
+
 TEST(AugmentedModel, WholeSampleDelayShiftsAndFractionalDelayInterpolates) {
   const StateSpace d = sysid::c2d_zoh(oscillator(30, 0.05), kTs);
   const MatrixXd u = test_input(1000, 4);

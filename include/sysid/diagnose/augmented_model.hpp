@@ -65,6 +65,8 @@ class AugmentedSimulator {
   const StateSpace& nominal() const { return m_nominal; }
   int substeps() const { return m_substeps; }
   bool has_continuous_equivalent() const { return m_continuous.has_value(); }
+  /// The nominal's continuous-time (ZOH) equivalent, when it exists.
+  const std::optional<StateSpace>& continuous_equivalent() const { return m_continuous; }
   const std::vector<std::string>& warnings() const { return m_warnings; }
 
  private:

@@ -64,6 +64,16 @@ inline const std::vector<BlockKindInfo>& block_kinds() {
        "a periodic disturbance not caused by the input"},
       {"offset_drift", BlockStage::sensor, {"offset", "slope"}, {"offset", "slope"}, "a sensor offset and drift"},
       {"cross_coupling", BlockStage::coupling, {"gain"}, {}, "coupling from another input the simulation lacks"},
+      // Added after the 13 DESIGN.md kinds ("new kinds may be added"): a mode the
+      // simulation has, at another frequency or damping in the recordings — the
+      // first sign of a mass or stiffness error, e.g. in a finite-element model.
+      // The nominal mode's contribution (numerator b1 s + b0 over its own
+      // denominator, from the nominal's modal decomposition) is taken out and put
+      // back with the new frequency and damping.
+      {"mode_shift", BlockStage::plant_parallel,
+       {"freq_hz", "damping", "nominal_freq_hz", "nominal_damping", "numerator_b0", "numerator_b1"},
+       {"freq_hz", "damping", "nominal_freq_hz", "nominal_damping"},
+       "a mode of the simulation at another frequency or damping"},
   };
   return kinds;
 }
