@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
              sysid::cli::register_armax(app), sysid::cli::register_arma(app), sysid::cli::register_oe(app),
              sysid::cli::register_assemble(app), sysid::cli::register_hsv(app), sysid::cli::register_reduce(app),
              sysid::cli::register_lms(app), sysid::cli::register_okid(app), sysid::cli::register_era(app),
-             sysid::cli::register_diagnose(app)};
+             sysid::cli::register_diagnose(app), sysid::cli::register_check(app)};
   } catch (const std::exception& e) {  // a bug in an option definition
     std::cerr << "sysid: internal error: " << e.what() << "\n";
     return 3;

@@ -35,5 +35,6 @@ Verb register_lms(CLI::App& app);
 Verb register_okid(CLI::App& app);
 Verb register_era(CLI::App& app);
 Verb register_diagnose(CLI::App& app);
+Verb register_check(CLI::App& app);
 
 }  // namespace sysid::cli

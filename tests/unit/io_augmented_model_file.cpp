@@ -88,6 +88,8 @@ AugmentedModel every_kind_model() {
       physics_block("periodic_disturbance", {{"freq_hz", p(49, 51)}, {"amplitude", p(0.01, 0.02)}, {"phase_rad", p(-3, 3)}}, 0, 1),
       physics_block("offset_drift", {{"offset", p(-0.1, 0.1)}, {"slope", p(-0.01, 0.01)}}, 0, 0),
       physics_block("cross_coupling", {{"gain", p(0.1, 0.3)}}, 1, 0),
+      physics_block("mode_shift", {{"freq_hz", p(96, 98)}, {"damping", p(0.04, 0.06)}, {"nominal_freq_hz", 95.0},
+                                   {"nominal_damping", 0.05}, {"numerator_b0", p(1e4, 2e4)}, {"numerator_b1", p(-5, 5)}}, 0, 1),
   };
   return a;
 }

@@ -1,0 +1,106 @@
+#pragma once
+/// @file
+/// Purpose: a pre-flight check of a log before any identification (`sysid check`):
+/// what the data can support and what will go wrong, each with its consequence in
+/// words — so an engineer fixes the experiment, not the model.
+///
+/// Per input: the excitation order (how many parameters of a linear model the
+/// input can determine), offset, trend, clipping. Per output: a signal-to-noise
+/// estimate, offset, trend, clipping. Per input-output pair: signs of feedback.
+/// Of the time column (when given): irregular sampling and gaps.
+///
+/// Method:
+/// - Excitation order: an input is persistently exciting of order n when the
+///   n x n covariance matrix of (u(t-1) .. u(t-n)) is non-singular (Ljung,
+///   "System Identification", 2nd ed., def. 13.2); the order is the number of
+///   singular values of the (mean-removed) data Hankel matrix of the input,
+///   n = max_excitation_order columns, before the first "cliff": a singular value
+///   below excitation_tolerance times the largest and 40 dB below its
+///   predecessor. A single sine gives 2, a sum of k sines 2k, white noise every n.
+///   A band-limited continuous spectrum (a chirp over 10 % of the Nyquist band)
+///   has smoothly decaying singular values — an ill-conditioned but exciting
+///   input — and counts as n. The singular values come from a QR of the Hankel
+///   matrix (no normal equations).
+/// - Signal-to-noise: an ARX(na, nb) model of each output on all inputs (QR least
+///   squares, pem/arx.hpp) with na = nb = noise_model_order; its one-step residual
+///   variance lambda estimates the noise, SNR = (var y - lambda) / lambda. It
+///   overstates the SNR when the noise is coloured (a predictor forecasts part of
+///   it) — the report calls it an upper estimate.
+/// - Offset: |mean| / std. Trend: the linear trend's change over the record
+///   divided by the detrended std (least squares by QR on [1, t]).
+/// - Clipping: the share of samples sitting at the channel's maximum or minimum
+///   (within 1e-9 of the range); a real signal touches its extreme once.
+/// - Feedback: in open loop the input does not depend on past outputs, so after
+///   prewhitening the input (an AR(prewhitening_order) fitted to it, A(q) applied
+///   to input and output alike) the cross-correlation of u(t + k) with y(t) is
+///   zero for every k >= 1 (Ljung sec. 13.4; Söderström & Stoica, "System
+///   Identification", sec. 12.5). A correlation beyond the Bonferroni-corrected
+///   bound z / sqrt(N) at some k in 1..feedback_lags is reported as likely feedback.
+/// - Sampling: the time column's steps against their median: jitter (largest
+///   relative deviation) and gaps (steps longer than 1.5 times the median).
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+#include "sysid/core/io_data.hpp"
+
+namespace sysid {
+
+struct DataCheckOptions {
+  Eigen::Index max_excitation_order = 60;     ///< columns of the input's Hankel matrix
+  double excitation_tolerance = 1e-3;         ///< singular values below this times the largest count as zero (60 dB)
+  Eigen::Index excitation_samples = 20000;    ///< rows of the Hankel matrix used at most (from the start)
+  int noise_model_order = 20;                 ///< ARX orders na = nb for the SNR estimate
+  int prewhitening_order = 20;                ///< AR order of the input's prewhitening filter
+  Eigen::Index feedback_lags = 25;            ///< lags k = 1..feedback_lags tested
+  double confidence = 0.99;                   ///< of the feedback test (Bonferroni over the lags and pairs)
+  double offset_ratio = 0.5;                  ///< |mean| / std above which an offset is reported
+  double trend_ratio = 0.5;                   ///< trend change / std above which a trend is reported
+  double clipping_share = 0.002;              ///< share of samples at an extreme that signals clipping
+};
+
+struct ChannelCheck {
+  std::string name;
+  double mean = 0.0, std = 0.0;
+  double offset_ratio = 0.0;    ///< |mean| / std
+  double trend_ratio = 0.0;     ///< |slope| * duration / std of the detrended signal
+  double clipped_share = 0.0;   ///< share of samples at the maximum or the minimum
+  Eigen::Index excitation_order = 0;  ///< inputs only
+  Eigen::VectorXd excitation_singular_values;  ///< inputs only, relative to the largest
+  double snr_db = 0.0;          ///< outputs only (upper estimate, see file comment)
+};
+
+struct FeedbackCheck {
+  Eigen::Index input = 0, output = 0;
+  double largest_correlation = 0.0;  ///< max |r_uy(k)|, k = 1..feedback_lags, prewhitened
+  Eigen::Index at_lag = 0;
+  double bound = 0.0;                ///< z / sqrt(N)
+  bool likely = false;
+};
+
+struct SamplingCheck {
+  bool checked = false;         ///< a time column was given
+  double median_step = 0.0;     ///< s
+  double max_jitter = 0.0;      ///< max |step - median| / median
+  Eigen::Index gaps = 0;        ///< steps longer than 1.5 median
+  Eigen::Index non_increasing = 0;
+};
+
+struct DataCheckResult {
+  Eigen::Index samples = 0;
+  std::vector<ChannelCheck> inputs, outputs;
+  std::vector<FeedbackCheck> feedback;
+  SamplingCheck sampling;
+  /// Each problem found with its consequence, in words, most serious first.
+  std::vector<std::string> findings;
+  /// The whole report as text (a table per channel, then the findings).
+  std::string report() const;
+};
+
+/// Purpose: the pre-flight check of the first experiment of `data` (file comment);
+/// `time` is the raw time column (empty when there is none).
+/// Preconditions (std::invalid_argument): data.validate(); at least
+/// 4 (max_excitation_order + noise_model_order) samples; options in range.
+DataCheckResult check_data(const IoData& data, const Eigen::VectorXd& time = {}, const DataCheckOptions& options = {});
+
+}  // namespace sysid
