@@ -1,6 +1,8 @@
 #include "sysid/io/matrix_market.hpp"
 
 #include <gtest/gtest.h>
+
+#include "run_cli.hpp"
 #include <unistd.h>
 
 #include <Eigen/Dense>
@@ -23,24 +25,7 @@ using Sparse = Eigen::SparseMatrix<double>;
 
 namespace {
 
-/// A fresh directory under the system temporary directory, removed with its contents.
-class TempDir {
- public:
-  TempDir() {
-    std::random_device rd;
-    m_path = fs::temp_directory_path() /
-             ("sysid_io_mm_" + std::to_string(::getpid()) + "_" + std::to_string(rd()) + std::to_string(rd()));
-    fs::create_directories(m_path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(m_path, ec);
-  }
-  const fs::path& path() const { return m_path; }
-
- private:
-  fs::path m_path;
-};
+using sysid::test::TempDir;  // tests/support/run_cli.hpp
 
 std::uint64_t bits(double x) {
   std::uint64_t b;
