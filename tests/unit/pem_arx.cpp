@@ -36,6 +36,22 @@ TEST(Arx, NoiseFreeDataGiveTheExactParameters) {
   EXPECT_NEAR(r.models[0].Ts, 0.01, 0.0);
 }
 
+TEST(Arx, ScalesOfNineDecadesGiveTheSameParameters) {
+  // Hardening (issue 8): u x su, y x sy leaves A unchanged and scales B by sy / su;
+  // the column-scaled QR must keep every digit it has at unit scale.
+  const Eigen::VectorXd u = test::white_noise(400, 1, 3).col(0);
+  const Eigen::VectorXd y = arx_output(kA, kB, 2, u, 0.01 * test::white_noise(400, 1, 4).col(0));
+  const ArxOptions o{.na = 2, .nb = {2}, .nk = {2}, .remove_means = false};
+  const LinearPolynomialResult reference = arx(IoData(u, y, 0.01), o);
+  for (double su : {1e-9, 1e9})
+    for (double sy : {1e-9, 1e9}) {
+      const LinearPolynomialResult r = arx(IoData(Eigen::VectorXd(su * u), Eigen::VectorXd(sy * y), 0.01), o);
+      EXPECT_LT((r.models[0].A - reference.models[0].A).norm(), 1e-9) << su << " " << sy;
+      EXPECT_LT((r.models[0].B[0] * su / sy - reference.models[0].B[0]).norm(), 1e-9 * reference.models[0].B[0].norm())
+          << su << " " << sy;
+    }
+}
+
 TEST(Arx, NoisyDataWithinTheReportedStandardErrors) {
   const Eigen::Index n = 20000;
   const Eigen::VectorXd u = test::white_noise(n, 1, 2).col(0), e = test::white_noise(n, 1, 3, 0.3).col(0);

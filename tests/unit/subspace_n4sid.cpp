@@ -172,6 +172,32 @@ TEST(N4sid, EnforcedStabilityGivesAStableModel) {
   EXPECT_LT(r.model.A.eigenvalues().cwiseAbs().maxCoeff(), 1.0);
 }
 
+TEST(N4sid, InputAndOutputScalesOfNineDecadesGiveTheSameModel) {
+  // Hardening (issue 8): inputs scaled by 1e-9 and 1e9, outputs by the inverse or
+  // the same factor, must give the same model up to that scale — the algorithm
+  // scales its data, it must not lose digits or change the chosen order.
+  const StateSpace truth = test::random_modal_system(2, 2, 2, 77);
+  const IoData base = simulate_noisy(truth, 4000, 78, 0.01);
+  N4sidOptions opt;
+  opt.order = 0;  // automatic: the chosen order must not depend on the units
+  const N4sidResult reference = n4sid(base, opt);
+  for (double su : {1e-9, 1e9})
+    for (double sy : {1e-9, 1e9}) {
+      IoData scaled = base;
+      scaled.experiments.front().u *= su;
+      scaled.experiments.front().y *= sy;
+      const N4sidResult r = n4sid(scaled, opt);
+      EXPECT_EQ(r.order, reference.order) << "u x " << su << ", y x " << sy;
+      // G_scaled = (sy / su) G: compare the rescaled response.
+      StateSpace back = r.model;
+      back.B *= su;
+      back.D *= su;
+      back.C /= sy;
+      back.D /= sy;
+      EXPECT_LT(relative_frf_error(reference.model, back), 1e-6) << "u x " << su << ", y x " << sy;
+    }
+}
+
 TEST(N4sid, ConstantInputIsRejected) {
   const Eigen::MatrixXd u = Eigen::MatrixXd::Constant(500, 1, 2.0);
   const IoData data(u, test::white_noise(500, 1, 1), 1.0);
