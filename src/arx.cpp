@@ -1,6 +1,7 @@
 // Implementation of pem/arx.hpp (methods and references in the header).
 #include <sysid/core/errors.hpp>
 #include <sysid/pem/arx.hpp>
+#include <sysid/core/input_collinearity.hpp>
 #include <sysid/pem/lagged_regression.hpp>
 
 #include <cmath>
@@ -109,6 +110,7 @@ LinearPolynomialResult arx(IoData data, const ArxOptions& options) {
     if (nb < 0) throw std::invalid_argument("arx: need nb >= 0");
   const std::vector<int> nk = detail::input_delays(options.nk, m);
   LinearPolynomialResult out;
+  out.warnings = collinear_input_warnings(data, "arx");
   std::tie(out.input_offset, out.output_offset) = detail::remove_means_if(data, options.remove_means);
   for (Eigen::Index r = 0; r < l; ++r) {
     std::vector<RegressionTerm> terms{{0, 1, options.na, -1.0}};

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "sysid/core/input_collinearity.hpp"
 #include "sysid/pem/arx.hpp"
 #include "sysid/signal/polynomial_filter.hpp"
 #include "sysid/spectral/confidence.hpp"
@@ -104,6 +105,8 @@ DataCheckResult check_data(const IoData& data, const Eigen::VectorXd& time, cons
                                                          : "add frequencies to the excitation"));
     r.inputs.push_back(std::move(c));
   }
+
+  for (auto& w : collinear_input_warnings(data, "")) serious.push_back(std::move(w));
 
   // SNR per output from ARX(n, n) on all inputs (noise variance of each output model).
   std::vector<double> noise_variance(static_cast<std::size_t>(l), std::numeric_limits<double>::quiet_NaN());

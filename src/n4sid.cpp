@@ -1,6 +1,7 @@
 // Implementation of subspace/n4sid.hpp (the method and its references are in the header).
 // Compiled once into libsysid: the Eigen decompositions below are heavy to instantiate.
 #include <sysid/subspace/n4sid.hpp>
+#include <sysid/core/input_collinearity.hpp>
 
 #include <Eigen/Dense>
 #include <sysid/core/discrete_riccati.hpp>
@@ -446,6 +447,7 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
     }
     return c;
   };
+  for (auto& w : collinear_input_warnings(data, "n4sid")) res.warnings.push_back(std::move(w));
   if (res.decimation > 1) {
     // Zero-phase 8th-order Butterworth at 0.8 x the new Nyquist frequency on
     // inputs and outputs alike (their relation is unchanged), then every r-th sample.
