@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "run_cli.hpp"
+#include "sparse_bits.hpp"
 #include <unistd.h>
 
 #include <cmath>
@@ -30,6 +31,8 @@ using Sparse = Eigen::SparseMatrix<double>;
 
 namespace {
 
+using sysid::test::bits;
+using sysid::test::identical;
 using sysid::test::TempDir;  // tests/support/run_cli.hpp
 
 /// Restores the working directory however the test ends.
@@ -55,25 +58,6 @@ std::string read_text(const fs::path& path) {
   std::stringstream s;
   s << in.rdbuf();
   return s.str();
-}
-
-std::uint64_t bits(double x) {
-  std::uint64_t b;
-  std::memcpy(&b, &x, sizeof b);
-  return b;
-}
-
-::testing::AssertionResult identical(Sparse a, Sparse b) {
-  a.makeCompressed();
-  b.makeCompressed();
-  if (a.rows() != b.rows() || a.cols() != b.cols() || a.nonZeros() != b.nonZeros())
-    return ::testing::AssertionFailure() << "shape or pattern size differs";
-  for (Eigen::Index k = 0; k <= a.outerSize(); ++k)
-    if (a.outerIndexPtr()[k] != b.outerIndexPtr()[k]) return ::testing::AssertionFailure() << "column start " << k;
-  for (Eigen::Index k = 0; k < a.nonZeros(); ++k)
-    if (a.innerIndexPtr()[k] != b.innerIndexPtr()[k] || bits(a.valuePtr()[k]) != bits(b.valuePtr()[k]))
-      return ::testing::AssertionFailure() << "entry " << k << ": " << a.valuePtr()[k] << " vs " << b.valuePtr()[k];
-  return ::testing::AssertionSuccess();
 }
 
 /// A chain of n masses and springs (fixed at one end) with awkward numbers, so

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "run_cli.hpp"
+#include "sparse_bits.hpp"
 #include <unistd.h>
 
 #include <Eigen/Dense>
@@ -25,33 +26,9 @@ using Sparse = Eigen::SparseMatrix<double>;
 
 namespace {
 
+using sysid::test::bits;
+using sysid::test::identical;
 using sysid::test::TempDir;  // tests/support/run_cli.hpp
-
-std::uint64_t bits(double x) {
-  std::uint64_t b;
-  std::memcpy(&b, &x, sizeof b);
-  return b;
-}
-
-/// Same shape, same stored pattern (explicit zeros included) and the same bits in
-/// every stored value: what "bit-exact round trip" means for a sparse matrix.
-::testing::AssertionResult identical(Sparse a, Sparse b) {
-  a.makeCompressed();
-  b.makeCompressed();
-  if (a.rows() != b.rows() || a.cols() != b.cols())
-    return ::testing::AssertionFailure() << "shape " << a.rows() << "x" << a.cols() << " vs " << b.rows() << "x"
-                                         << b.cols();
-  if (a.nonZeros() != b.nonZeros())
-    return ::testing::AssertionFailure() << "stored entries " << a.nonZeros() << " vs " << b.nonZeros();
-  for (Eigen::Index k = 0; k <= a.outerSize(); ++k)
-    if (a.outerIndexPtr()[k] != b.outerIndexPtr()[k]) return ::testing::AssertionFailure() << "column start " << k;
-  for (Eigen::Index k = 0; k < a.nonZeros(); ++k) {
-    if (a.innerIndexPtr()[k] != b.innerIndexPtr()[k]) return ::testing::AssertionFailure() << "row index of entry " << k;
-    if (bits(a.valuePtr()[k]) != bits(b.valuePtr()[k]))
-      return ::testing::AssertionFailure() << "entry " << k << ": " << a.valuePtr()[k] << " vs " << b.valuePtr()[k];
-  }
-  return ::testing::AssertionSuccess();
-}
 
 /// Values that break a careless writer: non-terminating binary fractions, the
 /// extremes of the exponent range, subnormals, both zeros.
