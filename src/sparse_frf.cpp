@@ -173,10 +173,7 @@ SparseFrfResult sparse_frf(const SecondOrderModel& model, const Eigen::VectorXd&
         const DofOutput& out = model.outputs[static_cast<std::size_t>(i)];
         const auto d = static_cast<std::size_t>(out.dof);
         const Complex displacement(x[2 * d], x[2 * d + 1]);
-        const Complex factor = out.quantity == Quantity::displacement ? Complex(1.0)
-                               : out.quantity == Quantity::velocity   ? Complex(0.0, w)
-                                                                      : Complex(-w2);
-        h(i, j) = factor * displacement;
+        h(i, j) = quantity_factor(out.quantity, w) * displacement;
       }
     }
   }

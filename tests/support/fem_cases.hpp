@@ -53,9 +53,7 @@ inline Eigen::MatrixXcd dense_response(const fem::SecondOrderModel& model, doubl
   Eigen::MatrixXcd h(static_cast<Eigen::Index>(model.outputs.size()), f.cols());
   for (std::size_t i = 0; i < model.outputs.size(); ++i) {
     const auto& out = model.outputs[i];
-    const C factor = out.quantity == fem::Quantity::displacement ? C(1.0)
-                     : out.quantity == fem::Quantity::velocity   ? C(0.0, w)
-                                                                 : C(-w * w);
+    const C factor = fem::quantity_factor(out.quantity, w);
     h.row(static_cast<Eigen::Index>(i)) = factor * x.row(out.dof);
   }
   return h;

@@ -40,9 +40,7 @@ TEST(FemSparseFrf, EqualsTheFullModalSumWithRayleighDamping) {
       const Complex denominator(wr2 - w * w, w * (2.0 + 1e-5 * wr2));
       for (int i = 0; i < 3; ++i) {
         const auto& out = model.outputs[static_cast<std::size_t>(i)];
-        const Complex factor = out.quantity == sysid::fem::Quantity::displacement ? Complex(1.0)
-                               : out.quantity == sysid::fem::Quantity::velocity   ? Complex(0.0, w)
-                                                                                  : Complex(-w * w);
+        const Complex factor = sysid::fem::quantity_factor(out.quantity, w);
         modal(i, 0) += factor * dense.shapes(out.dof, q) * dense.shapes(force, q) / denominator;
       }
     }

@@ -19,6 +19,7 @@
 ///     K (1 + 2 j zeta), which gives each mode the same damping at its resonance
 ///     (Ewins, "Modal Testing", 2nd ed., sec. 2.3) and says so in a warning.
 #include <Eigen/SparseCore>
+#include <complex>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -32,6 +33,17 @@ enum class Quantity { displacement, velocity, acceleration };
 /// std::invalid_argument naming the accepted words.
 const char* quantity_name(Quantity quantity);
 Quantity quantity_from_name(const std::string& name);
+
+/// The factor from displacement to `quantity` at angular frequency omega (rad/s):
+/// 1, j omega or -omega^2.
+inline std::complex<double> quantity_factor(Quantity quantity, double omega) {
+  switch (quantity) {
+    case Quantity::velocity: return {0.0, omega};
+    case Quantity::acceleration: return {-omega * omega, 0.0};
+    case Quantity::displacement: break;
+  }
+  return {1.0, 0.0};
+}
 
 enum class DampingKind { none, matrix, rayleigh, modal_ratio };
 
