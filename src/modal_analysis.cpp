@@ -34,8 +34,12 @@ class CholmodShiftInvert {
   Eigen::Index rows() const { return m_k.rows(); }
   Eigen::Index cols() const { return m_k.cols(); }
 
-  /// Factorises K - sigma M; returns false when it is not positive definite.
+  /// Factorises K - sigma M; returns false when it is not positive definite. The
+  /// factor of the last successful shift is kept: Spectra's constructor sets the
+  /// shift the caller has just factorised, which then costs nothing.
   bool try_shift(double sigma) {
+    if (m_factorised && sigma == m_sigma) return true;
+    m_factorised = false;
     SparseMatrix shifted = m_k - sigma * m_m;
     shifted.makeCompressed();
     if (!m_analysed) {
@@ -43,7 +47,9 @@ class CholmodShiftInvert {
       m_analysed = true;
     }
     m_solver.factorize(shifted);
-    return m_solver.info() == Eigen::Success;
+    m_factorised = m_solver.info() == Eigen::Success;
+    m_sigma = sigma;
+    return m_factorised;
   }
   void set_shift(double sigma) {
     if (!try_shift(sigma))
@@ -60,6 +66,8 @@ class CholmodShiftInvert {
   const SparseMatrix& m_m;
   Cholesky m_solver;
   bool m_analysed = false;
+  bool m_factorised = false;
+  double m_sigma = 0.0;
 };
 
 }  // namespace
