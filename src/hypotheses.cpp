@@ -15,6 +15,31 @@ namespace {
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr double kTiny = std::numeric_limits<double>::min();
 
+/// The eigen-decomposition of the nominal's continuous equivalent A = V diag(p) V^-1,
+/// with C V and V^-1 B: every path's modal residues r = (C V)_ik (V^-1 B)_kj.
+/// Empty (no poles) when there is no continuous equivalent or V is (nearly)
+/// defective — no reliable residues then.
+struct ModalBasis {
+  Eigen::VectorXcd poles;
+  Eigen::MatrixXcd output_shapes;  ///< C V, l x n
+  Eigen::MatrixXcd input_shapes;   ///< V^-1 B, n x m
+};
+
+ModalBasis modal_basis(const DetectionData& d) {
+  ModalBasis basis;
+  const auto& continuous = d.simulator->continuous_equivalent();
+  if (!continuous) return basis;
+  Eigen::EigenSolver<Eigen::MatrixXd> eig(continuous->A);
+  if (eig.info() != Eigen::Success) return basis;
+  const Eigen::MatrixXcd V = eig.eigenvectors();
+  const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXcd>(V).singularValues();
+  if (!(sv(sv.size() - 1) > 1e-10 * sv(0))) return basis;
+  basis.poles = eig.eigenvalues();
+  basis.output_shapes = continuous->C.cast<std::complex<double>>() * V;
+  basis.input_shapes = V.partialPivLu().solve(continuous->B.cast<std::complex<double>>());
+  return basis;
+}
+
 /// Shared quantities of the detection data.
 struct Context {
   const DetectionData& d;
@@ -23,8 +48,10 @@ struct Context {
   Eigen::VectorXd output_weight;  ///< 1 / std(y_i)
   Eigen::MatrixXd residual;       ///< y - current
   double residual_energy = 0.0;   ///< weighted
+  ModalBasis nominal_basis;       ///< of the nominal, once for every path
 
-  Context(const DetectionData& data, const DetectionOptions& options) : d(data), o(options) {
+  Context(const DetectionData& data, const DetectionOptions& options)
+      : d(data), o(options), nominal_basis(modal_basis(data)) {
     rows = d.y.rows();
     m = d.u.cols();
     l = d.y.cols();
@@ -295,7 +322,7 @@ void add_plant_candidates(const Context& c, long j, long i, std::vector<Candidat
 /// One lightly damped mode of the nominal in the path input j -> output i, in the
 /// form of a mode_shift block: b1 s + b0 over s^2 + 2 zeta w s + w^2.
 struct NominalMode {
-  double freq_hz = 0.0, damping = 0.0, b0 = 0.0, b1 = 0.0, peak_gain = 0.0;
+  double freq_hz = 0.0, damping = 0.0, b0 = 0.0, b1 = 0.0;
 };
 
 /// The nominal's lightly damped modes (damping < 0.3, below 0.45 fs) with their
@@ -304,27 +331,14 @@ struct NominalMode {
 /// (2 Re(r) s - 2 Re(r conj(p))) / (s^2 - 2 Re(p) s + |p|^2).
 std::vector<NominalMode> nominal_modes(const Context& c, long j, long i) {
   std::vector<NominalMode> modes;
-  const auto& continuous = c.d.simulator->continuous_equivalent();
-  if (!continuous) return modes;
-  Eigen::EigenSolver<Eigen::MatrixXd> eig(continuous->A);
-  if (eig.info() != Eigen::Success) return modes;
-  const Eigen::MatrixXcd V = eig.eigenvectors();
-  Eigen::PartialPivLU<Eigen::MatrixXcd> lu(V);
-  // A (nearly) defective A has no reliable modal residues: skip rather than guess.
-  const Eigen::JacobiSVD<Eigen::MatrixXcd> svd(V);
-  const Eigen::VectorXd sv = svd.singularValues();
-  if (!(sv(sv.size() - 1) > 1e-10 * sv(0))) return modes;
-  const Eigen::VectorXcd left = lu.solve(continuous->B.col(j).cast<std::complex<double>>());
-  const Eigen::RowVectorXcd right = continuous->C.row(i).cast<std::complex<double>>() * V;
-  for (Eigen::Index k = 0; k < V.cols(); ++k) {
-    const std::complex<double> p = eig.eigenvalues()(k);
+  const ModalBasis& basis = c.nominal_basis;
+  for (Eigen::Index k = 0; k < basis.poles.size(); ++k) {
+    const std::complex<double> p = basis.poles(k);
     if (!(p.imag() > 0.0)) continue;
     const double w = std::abs(p), zeta = -p.real() / w, f = w / kTwoPi;
     if (!(zeta > 0.0 && zeta < 0.3) || f >= 0.45 / c.d.Ts) continue;
-    const std::complex<double> r = right(k) * left(k);
-    NominalMode mode{f, zeta, -2.0 * (r * std::conj(p)).real(), 2.0 * r.real(), 0.0};
-    mode.peak_gain = std::abs(std::complex<double>(mode.b0, w * mode.b1)) / (2.0 * zeta * w * w);
-    modes.push_back(mode);
+    const std::complex<double> r = basis.output_shapes(i, k) * basis.input_shapes(k, j);
+    modes.push_back({f, zeta, -2.0 * (r * std::conj(p)).real(), 2.0 * r.real()});
   }
   return modes;
 }
