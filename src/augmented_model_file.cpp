@@ -2,6 +2,7 @@
 // include/sysid/io/augmented_model_file.hpp.
 #include "sysid/io/augmented_model_file.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -32,11 +33,21 @@ std::vector<std::string> names_or_default(const std::vector<std::string>& names,
 long channel_index(const nlohmann::json& j, const std::vector<std::string>& names, const std::string& where,
                    const std::string& source) {
   if (!j.is_string()) throw DataError(source, 0, 0, where + ": expected a channel name (string)");
-  for (std::size_t k = 0; k < names.size(); ++k)
-    if (names[k] == j.get<std::string>()) return static_cast<long>(k);
+  const auto& name = j.get_ref<const std::string&>();
+  const auto first = std::find(names.begin(), names.end(), name);
+  if (first != names.end()) {
+    // The model file format allows repeated channel names; a block naming one of
+    // them would otherwise silently act on the first.
+    if (const auto second = std::find(first + 1, names.end(), name); second != names.end())
+      throw DataError(source, 0, 0,
+                      where + ": channel name '" + name + "' is ambiguous (channels " +
+                          std::to_string(first - names.begin() + 1) + " and " +
+                          std::to_string(second - names.begin() + 1) + " of the nominal have it)");
+    return static_cast<long>(first - names.begin());
+  }
   std::string known;
   for (const auto& n : names) known += (known.empty() ? "" : ", ") + n;
-  throw DataError(source, 0, 0, where + ": no channel named '" + j.get<std::string>() + "' (the nominal has " + known + ")");
+  throw DataError(source, 0, 0, where + ": no channel named '" + name + "' (the nominal has " + known + ")");
 }
 
 nlohmann::json params_json(const PhysicsBlock& b, bool reported_only) {

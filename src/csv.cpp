@@ -9,6 +9,7 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 #include <unordered_set>
 
 #include "sysid/core/errors.hpp"
@@ -20,6 +21,9 @@ namespace {
 enum class Delimiter { comma, tab, whitespace };
 
 inline bool is_blank(char c) { return c == ' ' || c == '\t'; }
+
+/// UTF-8 byte-order mark, as written by Excel and some Windows tools.
+constexpr std::string_view k_utf8_bom = "\xEF\xBB\xBF";
 
 /// Field text for an error message: trimmed, and cut so a runaway line (a binary
 /// file, a missing newline) does not flood the terminal.
@@ -45,10 +49,7 @@ inline bool parse_number(const char* b, const char* e, double& v) {
 class CsvParser {
  public:
   CsvParser(const char* begin, const char* end, const std::string& source) : m_p(begin), m_end(end), m_source(source) {
-    // UTF-8 byte-order mark, as written by Excel and some Windows tools.
-    if (m_end - m_p >= 3 && static_cast<unsigned char>(m_p[0]) == 0xEF && static_cast<unsigned char>(m_p[1]) == 0xBB &&
-        static_cast<unsigned char>(m_p[2]) == 0xBF)
-      m_p += 3;
+    if (std::string_view(m_p, static_cast<std::size_t>(m_end - m_p)).starts_with(k_utf8_bom)) m_p += k_utf8_bom.size();
   }
 
   CsvTable parse() {
@@ -394,7 +395,9 @@ IoData log_from_table(const CsvTable& table, const LogOptions& options) {
                                  " of the record: nothing to interpolate from (use drop_rows to trim it)");
             const double a = x[r - 1], b = x[end];
             const double span = static_cast<double>(end - r + 1);
-            for (Eigen::Index i = r; i < end; ++i) x[i] = a + (b - a) * static_cast<double>(i - r + 1) / span;
+            // std::lerp, not a + (b - a) w: b - a overflows for values of opposite
+            // sign near the double range, which would put Inf into the data.
+            for (Eigen::Index i = r; i < end; ++i) x[i] = std::lerp(a, b, static_cast<double>(i - r + 1) / span);
             r = end;
           }
         }
@@ -417,6 +420,12 @@ IoData log_from_table(const CsvTable& table, const LogOptions& options) {
         throw DataError(src, line_of(r), static_cast<long>(time_col + 1),
                         "time stamps not increasing: " + format_seconds(tk[r]) + " s after " + format_seconds(tk[r - 1]) +
                             " s");
+      // Both finite, yet the difference can overflow (-1e308 then 1e308): an
+      // infinite step would pass the uniformity test below (Inf - Inf is NaN).
+      if (!std::isfinite(steps[static_cast<std::size_t>(r - 1)]))
+        throw DataError(src, line_of(r), static_cast<long>(time_col + 1),
+                        "time step from " + format_seconds(tk[r - 1]) + " s to " + format_seconds(tk[r]) +
+                            " s is too large for a double");
     }
     std::vector<double> sorted = steps;
     std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
@@ -440,8 +449,14 @@ IoData log_from_table(const CsvTable& table, const LogOptions& options) {
   }
 
   if (first > 0 || last < n_rows) {
-    u = u.middleRows(first, n).eval();
-    y = y.middleRows(first, n).eval();
+    // A time series has no input columns: Eigen would form the block of that
+    // empty matrix as its null data pointer plus an offset (undefined behaviour).
+    auto keep_rows = [&](Eigen::MatrixXd& x) {
+      if (x.cols() == 0) x.resize(n, 0);
+      else x = x.middleRows(first, n).eval();
+    };
+    keep_rows(u);
+    keep_rows(y);
   }
   return IoData(std::move(u), std::move(y), ts, options.inputs, options.outputs, src);
 }
@@ -471,9 +486,12 @@ std::string format_csv(const std::vector<std::string>& names, const Eigen::Matri
   bool all_numbers = true;
   for (const auto& n : names) {
     if (n.empty()) throw std::invalid_argument("format_csv: empty column name");
-    if (n.find_first_of(",\"\r\n") != std::string::npos || n.front() == '#' || is_blank(n.front()) || is_blank(n.back()))
+    // A leading byte-order mark would be skipped by the reader (it marks the encoding).
+    if (n.find_first_of(",\"\r\n") != std::string::npos || n.front() == '#' || is_blank(n.front()) || is_blank(n.back()) ||
+        n.starts_with(k_utf8_bom))
       throw std::invalid_argument("format_csv: column name '" + n +
-                                  "' cannot be written (no ',', '\"', line breaks, leading '#' or surrounding spaces)");
+                                  "' cannot be written (no ',', '\"', line breaks, leading '#' or byte-order mark, or "
+                                  "surrounding spaces)");
     if (names.size() == 1 && n.find_first_of(" \t") != std::string::npos)
       throw std::invalid_argument("format_csv: a single column name cannot contain spaces ('" + n + "')");
     if (!seen.insert(n).second) throw std::invalid_argument("format_csv: duplicate column name '" + n + "'");

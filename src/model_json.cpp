@@ -219,6 +219,34 @@ std::pair<long, long> line_column(const std::string& text, std::size_t byte) {
   return {line, static_cast<long>(idx - line_start + 1)};
 }
 
+/// Deepest nesting of arrays and objects a sysid JSON file may have. A model file
+/// needs 4 levels (object, sub-object, matrix, row); free-form keys get far more.
+/// nlohmann parses iteratively but copies, compares and prints recursively, so a
+/// file of 100000 '[' would overflow the stack when its value is kept in extra.
+constexpr long k_max_json_depth = 512;
+
+/// Byte offset of the first bracket that opens level k_max_json_depth + 1, or npos.
+/// Brackets inside strings do not count; the scan does not validate (the parser does).
+std::size_t too_deep_at(const std::string& text) {
+  long depth = 0;
+  bool in_string = false, escaped = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (escaped) escaped = false;
+      else if (c == '\\') escaped = true;
+      else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > k_max_json_depth) return i;
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+  return std::string::npos;
+}
+
 // ---- writing -----------------------------------------------------------------
 
 void check_finite(const Eigen::MatrixXd& m, const char* key) {
@@ -385,6 +413,11 @@ std::string model_to_json_string(const ModelFile& f) {
 }
 
 nlohmann::json parse_json_text(const std::string& text, const std::string& source_name) {
+  if (const std::size_t at = too_deep_at(text); at != std::string::npos) {
+    const auto [line, column] = line_column(text, at + 1);
+    throw DataError(source_name, line, column,
+                    "invalid JSON: lists and objects nested more than " + std::to_string(k_max_json_depth) + " deep");
+  }
   try {
     return json::parse(text);
   } catch (const json::parse_error& e) {

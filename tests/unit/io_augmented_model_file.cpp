@@ -267,6 +267,29 @@ TEST(AugmentedModelFile, ErrorsNameTheBlockAndTheProblem) {
   }
 }
 
+TEST(AugmentedModelFile, RepeatedChannelNameIsAmbiguous) {
+  // Model files may repeat a channel name; a block naming it used to act silently
+  // on the first such channel, so a block written for the second one came back
+  // on the first.
+  AugmentedModel a;
+  a.nominal = modal({{40.0, 0.03}, {95.0, 0.05}}, 2, 2);
+  a.nominal.input_names = {"u", "u"};
+  a.nominal.output_names = {"y1", "y2"};
+  a.blocks = {physics_block("deadzone", {{"width", 0.1}}, 1, 0)};
+  const json j = json::parse(sysid::model_to_json_string(sysid::augmented_model_to_file(a)));
+  const std::string m = read_error(j);
+  expect_contains(m, "blocks[0].input");
+  expect_contains(m, "'u' is ambiguous");
+  expect_contains(m, "channels 1 and 2");
+  // The outputs are distinct: naming one of them is fine.
+  json outputs_only = j;
+  outputs_only["blocks"][0].erase("input");
+  EXPECT_EQ(sysid::augmented_model_from_file(sysid::model_from_json_string(outputs_only.dump(), "aug.json"), "aug.json")
+                .blocks.at(0)
+                .output,
+            0);
+}
+
 TEST(AugmentedModelFile, ReportHasTheDesignKeysAndUnits) {
   // A 2nd-order plant (mode at 60 Hz, zeta 0.04) whose sensor reads 10 % high.
   AugmentedModel nominal;

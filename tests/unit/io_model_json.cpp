@@ -294,6 +294,22 @@ TEST(IoModelJson, InvalidJsonGivesLineAndColumn) {
   expect_bad("{\"Ts\": 1,\n", "invalid JSON", 2, 1);
 }
 
+TEST(IoModelJson, NestingDepthIsLimited) {
+  // An unknown key is kept in extra, and nlohmann copies, compares and prints
+  // recursively: 100000 nested lists overflowed the stack (found with
+  // tests/fuzz). Such a file is refused at the bracket that goes too deep.
+  const std::string head = R"({"Ts": 1, "A": [[0.5]], "B": [[1]], "C": [[1]], "D": [[0]], "note": )";
+  auto nested = [&](std::size_t depth) { return head + std::string(depth, '[') + std::string(depth, ']') + "}"; };
+  // The object is level 1, so the 512th '[' of "note" opens level 513.
+  expect_bad(nested(100000), "nested more than 512 deep", 1, static_cast<long>(head.size() + 512));
+  expect_bad(nested(512), "nested more than 512 deep", 1, static_cast<long>(head.size() + 512));
+  // 512 levels in all are accepted, and brackets inside strings do not count.
+  const ModelFile deepest = sysid::model_from_json_string(nested(511), "m.json");
+  EXPECT_TRUE(deepest.extra.contains("note"));
+  const ModelFile text = sysid::model_from_json_string(head + "\"" + std::string(1000, '[') + "\"}", "m.json");
+  EXPECT_EQ(text.extra["note"].get<std::string>().size(), 1000u);
+}
+
 TEST(IoModelJson, DimensionMismatchCaughtByValidateNamesFile) {
   // No outputs at all: each matrix has a consistent shape but the model is invalid.
   try {

@@ -28,7 +28,8 @@ namespace sysid {
 
 /// The augmented model of a model file of any type: a state-space or polynomial
 /// file gives the model with no blocks. Errors: sysid::DataError naming
-/// `source` and the offending block ("blocks[1].params: missing 'width'").
+/// `source` and the offending block ("blocks[1].params: missing 'width'"), also
+/// for a channel name the nominal lacks or has more than once.
 AugmentedModel augmented_model_from_file(const ModelFile& file, const std::string& source);
 
 /// A model file of type "augmented" (type "state-space" when there are no blocks).

@@ -117,9 +117,9 @@ IoData read_log(const std::string& path, const LogOptions& options);
 ///
 /// Errors (sysid::DataError): a missing column (at the header line, listing the
 /// available names); NaN/Inf per the policy; fewer than 2 rows with a time column;
-/// time stamps not increasing or non-uniform ("non-uniform time stamps: step
-/// 0.0011 s at line 57, expected 0.001 s"); no time column and no options.ts;
-/// time column and options.ts disagreeing.
+/// time stamps not increasing, non-uniform ("non-uniform time stamps: step
+/// 0.0011 s at line 57, expected 0.001 s") or with a step too large for a double;
+/// no time column and no options.ts; time column and options.ts disagreeing.
 IoData log_from_table(const CsvTable& table, const LogOptions& options);
 
 /// Several logs of the same machine as separate experiments (never concatenated:
@@ -132,7 +132,9 @@ IoData read_logs(const std::vector<std::string>& paths, const LogOptions& option
 /// format_csv -> read_csv_string is bit-exact. NaN and Inf are written as nan, inf.
 ///
 /// Preconditions (std::invalid_argument): names.size() == values.cols(); names
-/// non-empty, unique, without ',', '"', '#' at the start, or line breaks.
+/// non-empty, unique, without ',', '"', line breaks, surrounding spaces, or '#'
+/// or a UTF-8 byte-order mark at the start; not all of them numbers; a single
+/// name also without spaces or tabs.
 std::string format_csv(const std::vector<std::string>& names, const Eigen::MatrixXd& values);
 
 /// format_csv written with write_file_atomically (DataError if it cannot be written).

@@ -63,7 +63,9 @@ ModelFile model_from_json_string(const std::string& text, const std::string& sou
 
 /// Purpose: parse JSON text for any sysid file reader. Errors: sysid::DataError
 /// naming `source_name` and the 1-based line:column of a syntax error (nlohmann
-/// reports a byte offset), or no position for e.g. a number overflow.
+/// reports a byte offset) or of the bracket that nests lists and objects more
+/// than 512 deep (deeper values would overflow the stack when copied or
+/// printed), or no position for e.g. a number overflow.
 nlohmann::json parse_json_text(const std::string& text, const std::string& source_name);
 
 /// read_whole_file + model_from_json_string (DataError also for an unreadable file).
