@@ -2,6 +2,7 @@
 
 #include <sysid/core/discretize.hpp>
 #include <sysid/core/errors.hpp>
+#include <sysid/io/atomic_file.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -184,6 +185,22 @@ std::string format_fit_lines(const Eigen::VectorXd& fit, const std::vector<std::
 }
 
 void warn(const std::string& verb, const std::string& message) { std::cerr << "sysid " << verb << ": warning: " << message << "\n"; }
+
+namespace {
+bool g_replace_existing_outputs = false;
+}  // namespace
+
+void add_force_flag(CLI::App& cmd) {
+  cmd.add_flag("--force", g_replace_existing_outputs, "replace output files that already exist (never an input file)");
+}
+
+void claim_outputs(const std::vector<std::string>& outputs, const std::vector<std::string>& inputs) {
+  try {
+    check_output_paths(outputs, inputs, g_replace_existing_outputs, "pass --force to replace it");
+  } catch (const OutputConflictError& e) {  // contradicting options: a usage error (exit 1)
+    throw CLI::ValidationError("outputs", e.what());
+  }
+}
 
 void note(const std::string& verb, const std::string& message) { std::cerr << "sysid " << verb << ": " << message << "\n"; }
 

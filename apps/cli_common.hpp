@@ -69,6 +69,15 @@ StateSpace model_for_sample_time(const ModelFile& file, double ts, const std::st
 std::vector<std::string> model_input_names(const ModelFile& file);
 std::vector<std::string> model_output_names(const ModelFile& file);
 
+/// Adds --force (replace existing output files) to a verb that writes files. The
+/// flag is the one process-wide setting claim_outputs() reads: one verb runs per process.
+void add_force_flag(CLI::App& cmd);
+
+/// check_output_paths (io/atomic_file.hpp) with the --force setting: every verb that
+/// writes calls this first, with all the files it may write and all it reads, so a
+/// refused output costs nothing and leaves nothing half-done.
+void claim_outputs(const std::vector<std::string>& outputs, const std::vector<std::string>& inputs);
+
 /// "lo:hi" -> (lo, hi); throws CLI::ValidationError naming the option otherwise.
 std::pair<double, double> parse_range(const std::string& text, const std::string& option_name);
 

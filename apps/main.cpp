@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_common.hpp"
 #include "verbs.hpp"
 
 namespace {
@@ -71,6 +72,14 @@ int main(int argc, char** argv) {
              sysid::cli::register_assemble(app), sysid::cli::register_hsv(app), sysid::cli::register_reduce(app),
              sysid::cli::register_lms(app), sysid::cli::register_okid(app), sysid::cli::register_era(app),
              sysid::cli::register_diagnose(app), sysid::cli::register_check(app)};
+    // Every verb that writes files gets --force; without it an existing output is
+    // refused before any work (claim_outputs in cli_common.hpp).
+    for (const auto& verb : verbs)
+      for (const char* output_option : {"--out", "--json", "--plot", "--curve"})
+        if (verb.command->get_option_no_throw(output_option) != nullptr) {
+          sysid::cli::add_force_flag(*verb.command);
+          break;
+        }
   } catch (const std::exception& e) {  // a bug in an option definition
     std::cerr << "sysid: internal error: " << e.what() << "\n";
     return 3;

@@ -21,7 +21,7 @@ struct AssembleArgs {
 };
 
 void run_assemble(const AssembleArgs& a) {
-  refuse_to_overwrite_input(a.out, a.models);
+  claim_outputs({a.out}, a.models);
   std::vector<StateSpace> parts;
   std::vector<ModelFile> files;
   for (const auto& path : a.models) {

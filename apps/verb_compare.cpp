@@ -122,7 +122,7 @@ void print_frequency_compare(const FrequencyCompareResult& fc, const std::vector
 void run_fem_compare(const CompareArgs& a) {
   if (a.band.empty()) throw CLI::ValidationError("--band", "--fem compares frequency responses: give --band LO:HI");
   if (a.predict > 0) throw CLI::ValidationError("--predict", "an FE model has no noise model to predict with");
-  if (!a.plot.empty()) refuse_to_overwrite_input(a.plot, {a.fem_path, a.log_path});
+  claim_outputs({a.plot}, {a.fem_path, a.log_path});
   const auto [lo, hi] = parse_range(a.band, "--band");
   if (lo < 0.0) throw CLI::ValidationError("--band", "need LO >= 0, found '" + a.band + "'");
   const fem::SecondOrderModel model = read_fem_model(a.fem_path);
@@ -175,7 +175,7 @@ void run_compare(const CompareArgs& a) {
   }
   if (a.log_path.empty()) throw CLI::ValidationError("log", "give the model file and the CSV log");
   const std::string verb = "compare";
-  if (!a.plot.empty()) refuse_to_overwrite_input(a.plot, {a.model_path, a.log_path});
+  claim_outputs({a.plot}, {a.model_path, a.log_path});
   std::optional<std::pair<double, double>> band;
   if (!a.band.empty()) band = parse_range(a.band, "--band");
   if (band && band->first < 0.0) throw CLI::ValidationError("--band", "need LO >= 0, found '" + a.band + "'");

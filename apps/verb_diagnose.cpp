@@ -137,11 +137,7 @@ void run_diagnose(const DiagnoseArgs& a) {
   const std::string verb = "diagnose";
   std::vector<std::string> sources{a.model_path, a.log_path};
   if (!a.validate.empty()) sources.push_back(a.validate);
-  if (!a.json_path.empty()) refuse_to_overwrite_input(a.json_path, sources);
-  if (!a.out.empty()) refuse_to_overwrite_input(a.out, sources);
-  if (!a.plot.empty()) refuse_to_overwrite_input(a.plot, sources);
-  if (!a.json_path.empty() && a.json_path == a.out)
-    throw CLI::ValidationError("--json", "the report and the augmented model cannot be the same file");
+  claim_outputs({a.json_path, a.out, a.plot}, sources);
 
   const ModelFile file = load_model(a.model_path, /*allow_augmented=*/true);
   const auto [inputs, outputs] = model_channels(a.log, file, true);

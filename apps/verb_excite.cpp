@@ -30,6 +30,7 @@ struct ExciteArgs {
 
 void run_excite(const ExciteArgs& a) {
   const std::string verb = "excite";
+  claim_outputs({a.out}, {});
   // Length: exactly one of --duration / --samples (enforced by CLI11 excludes + this check).
   Eigen::Index n = 0;
   if (a.samples) {

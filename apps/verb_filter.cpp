@@ -38,7 +38,7 @@ void run_filter(const FilterArgs& a) {
   if (!band && a.detrend.empty() && a.decimate == 1)
     throw CLI::ValidationError("--lowpass/--highpass/--bandpass/--detrend/--decimate", "nothing to do: give a filter, --detrend or --decimate");
   if (a.zero_phase && !band) throw CLI::ValidationError("--zero-phase", "needs --lowpass, --highpass or --bandpass");
-  refuse_to_overwrite_input(a.out, {a.log_path});
+  claim_outputs({a.out}, {a.log_path});
 
   const CsvTable table = read_csv(a.log_path);
   const std::string time_name = a.time_column == "none" ? std::string() : a.time_column;

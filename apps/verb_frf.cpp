@@ -43,8 +43,7 @@ double db(double a) { return 20.0 * std::log10(a); }  // 0 -> -inf, inf -> inf: 
 void run_fem_frf(const FrfArgs& a) {
   const std::string verb = "frf";
   if (a.band.empty()) throw CLI::ValidationError("--band", "--fem needs the frequency band LO:HI in Hz");
-  if (!a.out.empty()) refuse_to_overwrite_input(a.out, {a.fem_path});
-  if (!a.plot.empty()) refuse_to_overwrite_input(a.plot, {a.fem_path});
+  claim_outputs({a.out, a.plot}, {a.fem_path});
   const auto [lo, hi] = parse_range(a.band, "--band");
   if (lo < 0.0 || (a.spacing == "log" && lo <= 0.0))
     throw CLI::ValidationError("--band", "need LO >= 0 (LO > 0 with --spacing log), found '" + a.band + "'");
@@ -111,8 +110,7 @@ void run_frf(const FrfArgs& a) {
   if (a.log_path.empty()) throw CLI::ValidationError("log", "give the CSV log (or --fem MODEL.json)");
   if (a.log.inputs.empty() || a.log.outputs.empty())
     throw CLI::ValidationError("--inputs/--outputs", "an estimate from a log needs --inputs and --outputs");
-  if (!a.out.empty()) refuse_to_overwrite_input(a.out, {a.log_path});
-  if (!a.plot.empty()) refuse_to_overwrite_input(a.plot, {a.log_path});
+  claim_outputs({a.out, a.plot}, {a.log_path});
   const std::vector<std::string> inputs = split_names(a.log.inputs, "--inputs");
   const std::vector<std::string> outputs = split_names(a.log.outputs, "--outputs");
   const LoadedLog log = load_log(a.log_path, make_log_options(a.log, inputs, outputs));

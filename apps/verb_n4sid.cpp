@@ -162,8 +162,7 @@ void run_n4sid(const N4sidArgs& a) {
 
   std::vector<std::string> inputs_files{a.log_path};
   if (!a.validate.empty()) inputs_files.push_back(a.validate);
-  if (!a.out.empty()) refuse_to_overwrite_input(a.out, inputs_files);
-  if (!a.plot.empty()) refuse_to_overwrite_input(a.plot, inputs_files);
+  claim_outputs({a.out, a.plot}, inputs_files);
 
   const LogOptions log_options =
       make_log_options(a.log, split_names(a.log.inputs, "--inputs"), split_names(a.log.outputs, "--outputs"));

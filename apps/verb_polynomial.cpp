@@ -94,7 +94,7 @@ void run_polynomial(Structure structure, const PolynomialArgs& a) {
   const std::string verb = name_of(structure);
   std::vector<std::string> inputs_files{a.log_path};
   if (!a.validate.empty()) inputs_files.push_back(a.validate);
-  if (!a.out.empty()) refuse_to_overwrite_input(a.out, inputs_files);
+  claim_outputs({a.out}, inputs_files);
   const LogOptions log_options = make_log_options(
       a.log, has_inputs(structure) ? split_names(a.log.inputs, "--inputs") : std::vector<std::string>{},
       split_names(a.log.outputs, "--outputs"));

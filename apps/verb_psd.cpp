@@ -31,8 +31,7 @@ struct PsdArgs {
 void run_psd(const PsdArgs& a) {
   const std::string verb = "psd";
   if (a.out.empty() && a.plot.empty()) throw CLI::ValidationError("--out/--plot", "give --out FILE.csv and/or --plot FILE.svg");
-  if (!a.out.empty()) refuse_to_overwrite_input(a.out, {a.log_path});
-  if (!a.plot.empty()) refuse_to_overwrite_input(a.plot, {a.log_path});
+  claim_outputs({a.out, a.plot}, {a.log_path});
   const std::vector<std::string> columns = split_names(a.columns, "--columns");
   if (columns.empty()) throw CLI::ValidationError("--columns", "name at least one column");
   LogArgs la;

@@ -4,6 +4,7 @@
 // realization/era.hpp).
 #include <sysid/adaptive/multistep_nlms.hpp>
 #include <sysid/config.hpp>
+#include <sysid/core/identification_warnings.hpp>
 #include <sysid/core/modal_table.hpp>
 #include <sysid/io/atomic_file.hpp>
 #include <sysid/io/markov_file.hpp>
@@ -51,10 +52,11 @@ std::vector<double> parse_numbers(const std::string& text, const std::string& op
 }
 
 void run_lms(const LmsArgs& a) {
-  refuse_to_overwrite_input(a.out, {a.log_path});
+  claim_outputs({a.out, a.curve}, {a.log_path});
   const LogOptions lo = make_log_options(a.log, split_names(a.log.inputs, "--inputs"), split_names(a.log.outputs, "--outputs"));
   const LoadedLog log = load_log(a.log_path, lo);
   if (log.data.experiments.size() != 1) throw std::invalid_argument("lms: expected one experiment");
+  require_varying_inputs(log.data, "lms");
   const Experiment& e = log.data.experiments.front();
   MultiStepNlmsOptions o;
   o.taps = a.taps;
@@ -64,12 +66,20 @@ void run_lms(const LmsArgs& a) {
   if (!a.gamma.empty() && static_cast<int>(o.gamma.size()) != a.steps && a.steps != 1)
     throw std::invalid_argument("lms: --steps " + std::to_string(a.steps) + " but --gamma has " + std::to_string(o.gamma.size()) + " weights");
   const Eigen::RowVectorXd u_mean = e.u.colwise().mean(), y_mean = e.y.colwise().mean();
+  // The library's eps is absolute (squared input units); relative to the data's
+  // power it keeps the regularisation negligible whatever the units (inputs in
+  // nanometres or in kilonewtons).
+  const double u_power = (e.u.rowwise() - u_mean).squaredNorm() / static_cast<double>(e.u.rows());
+  if (u_power > 0.0) o.eps = 1e-8 * static_cast<double>(o.taps) * u_power;
   const MultiStepNlmsResult r = multistep_nlms(e.u.rowwise() - u_mean, e.y.rowwise() - y_mean, o);
   const double y_power = (e.y.rowwise() - y_mean).squaredNorm() / static_cast<double>(e.y.size());
   std::cout << "lms: " << o.taps << " taps, K = " << o.gamma.size() << " steps, mu " << o.mu << ", " << r.info.samples
             << " samples; final a-priori error power " << fmt(r.info.error_power, 4) << " ("
             << fmt(10.0 * std::log10(r.info.error_power / y_power), 3) << " dB of the output power)\n";
   for (const auto& w : r.warnings) warn("lms", w);
+  // multistep_nlms works on matrices; the data checks need the log's names.
+  for (const auto& w : identification_data_warnings(log.data, o.taps, "an FIR of " + std::to_string(o.taps) + " taps", ""))
+    warn("lms", w);
   if (!a.curve.empty()) {
     std::ostringstream csv;
     csv << "sample,error_power\n";
@@ -94,7 +104,7 @@ struct OkidArgs {
 };
 
 void run_okid(const OkidArgs& a) {
-  refuse_to_overwrite_input(a.out, {a.log_path});
+  claim_outputs({a.out}, {a.log_path});
   const LogOptions lo = make_log_options(a.log, split_names(a.log.inputs, "--inputs"), split_names(a.log.outputs, "--outputs"));
   IoData data = load_log(a.log_path, lo).data;
   for (auto& e : data.experiments) {
@@ -124,7 +134,7 @@ struct EraArgs {
 };
 
 void run_era(const EraArgs& a) {
-  refuse_to_overwrite_input(a.out, a.markov_paths);
+  claim_outputs({a.out}, a.markov_paths);
   std::vector<MarkovParameters> experiments;
   bool from_okid = false;
   for (const auto& p : a.markov_paths) {

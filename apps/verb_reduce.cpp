@@ -83,7 +83,7 @@ void run_fem_reduce(const ReduceArgs& a) {
   if (a.modes < 1) throw std::invalid_argument("reduce: --fem needs --modes N (the number of lowest modes to keep)");
   if (a.order >= 0 || !a.max_error.empty() || !a.band.empty())
     throw std::invalid_argument("reduce: --order, --max-error and --band apply to state-space models; with --fem use --modes");
-  refuse_to_overwrite_input(a.out, {a.fem_path});
+  claim_outputs({a.out}, {a.fem_path});
   const fem::SecondOrderModel model = read_fem_model(a.fem_path);
   fem::ModalAnalysisOptions analysis;
   analysis.modes = a.modes;
@@ -145,7 +145,7 @@ void run_reduce(const ReduceArgs& a) {
   if (a.model_path.empty()) throw std::invalid_argument("reduce: give the model file (or --fem MODEL.json --modes N)");
   if (a.modes > 0 || a.ts > 0.0 || a.static_correction)
     throw std::invalid_argument("reduce: --modes, --ts and --static-correction need --fem");
-  refuse_to_overwrite_input(a.out, {a.model_path});
+  claim_outputs({a.out}, {a.model_path});
   const int chosen = (a.order >= 0) + !a.max_error.empty() + !a.band.empty();
   if (chosen != 1) throw std::invalid_argument("reduce: give exactly one of --order, --max-error, --band");
   ModelFile file = load_model(a.model_path);

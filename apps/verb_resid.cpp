@@ -70,7 +70,7 @@ void run_resid(const ResidArgs& a) {
   if (a.noise_params >= a.max_lag)
     throw CLI::ValidationError("--noise-params", "need --noise-params < --max-lag (the Ljung-Box degrees of freedom are "
                                                  "max-lag - noise-params)");
-  if (!a.out.empty()) refuse_to_overwrite_input(a.out, {a.model_path, a.log_path});
+  claim_outputs({a.out}, {a.model_path, a.log_path});
   const ModelFile file = load_model(a.model_path);
   const auto [inputs, outputs] = model_channels(a.log, file, true);
   const LoadedLog log = load_log(a.log_path, make_log_options(a.log, inputs, outputs));

@@ -134,7 +134,7 @@ std::string format_json_value(const nlohmann::json& v, int digits) {
 }
 
 void run_show(const ShowArgs& a) {
-  if (!a.plot.empty()) refuse_to_overwrite_input(a.plot, {a.model_path});
+  claim_outputs({a.plot}, {a.model_path});
   const ModelFile file = load_model(a.model_path, /*allow_augmented=*/true);
   const StateSpace& sys = file.model;
   const int d = a.digits;

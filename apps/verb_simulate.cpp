@@ -22,7 +22,7 @@ struct SimulateArgs {
 
 void run_simulate(const SimulateArgs& a) {
   const std::string verb = "simulate";
-  refuse_to_overwrite_input(a.out, {a.model_path, a.log_path});
+  claim_outputs({a.out}, {a.model_path, a.log_path});
   const ModelFile file = load_model(a.model_path, /*allow_augmented=*/true);
   if (file.type == "augmented" && a.x0 == "estimate")
     throw DataError(a.model_path, 0, 0, "--x0 estimate is not available for augmented (nonlinear) models; use zero or model");

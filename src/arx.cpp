@@ -1,7 +1,7 @@
 // Implementation of pem/arx.hpp (methods and references in the header).
 #include <sysid/core/errors.hpp>
 #include <sysid/pem/arx.hpp>
-#include <sysid/core/input_collinearity.hpp>
+#include <sysid/core/identification_warnings.hpp>
 #include <sysid/pem/lagged_regression.hpp>
 
 #include <cmath>
@@ -109,8 +109,14 @@ LinearPolynomialResult arx(IoData data, const ArxOptions& options) {
   for (int nb : options.nb)
     if (nb < 0) throw std::invalid_argument("arx: need nb >= 0");
   const std::vector<int> nk = detail::input_delays(options.nk, m);
+  require_varying_inputs(data, "arx");
   LinearPolynomialResult out;
-  out.warnings = collinear_input_warnings(data, "arx");
+  {
+    int nb_max = 0;
+    for (int nb : options.nb) nb_max = std::max(nb_max, nb);
+    out.warnings = identification_data_warnings(data, options.na + nb_max,
+                                                "ARX(" + std::to_string(options.na) + ", " + std::to_string(nb_max) + ")", "arx");
+  }
   std::tie(out.input_offset, out.output_offset) = detail::remove_means_if(data, options.remove_means);
   for (Eigen::Index r = 0; r < l; ++r) {
     std::vector<RegressionTerm> terms{{0, 1, options.na, -1.0}};

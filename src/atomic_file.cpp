@@ -23,17 +23,18 @@ namespace fs = std::filesystem;
 
 std::string errno_text(int err) { return std::generic_category().message(err); }
 
-/// Closes the descriptor and removes the temporary unless released: every early
-/// exit (exception) leaves nothing behind.
+/// Closes the descriptor and removes the temporary (once it has a name) unless
+/// released: every early exit (exception) leaves nothing behind.
 class TempFileGuard {
  public:
-  TempFileGuard(std::string path, int fd) : m_path(std::move(path)), m_fd(fd) {}
+  explicit TempFileGuard(int fd) : m_fd(fd) {}
   TempFileGuard(const TempFileGuard&) = delete;
   TempFileGuard& operator=(const TempFileGuard&) = delete;
   ~TempFileGuard() {
     if (m_fd >= 0) ::close(m_fd);
-    if (!m_released) ::unlink(m_path.c_str());
+    if (!m_released && !m_path.empty()) ::unlink(m_path.c_str());
   }
+  void set_name(std::string path) { m_path = std::move(path); }
   /// Closes explicitly so that a failing close (delayed write error on NFS) is seen.
   int close_checked() {
     const int rc = ::close(m_fd);
@@ -58,6 +59,70 @@ std::string unique_suffix() {
   std::snprintf(buf, sizeof buf, "%ld.%016llx%llx", static_cast<long>(::getpid()),
                 static_cast<unsigned long long>(rng()), counter.fetch_add(1));
   return buf;
+}
+
+std::string temporary_name(const fs::path& dir, const fs::path& target) {
+  return (dir / ("." + target.filename().string() + ".tmp." + unique_suffix())).string();
+}
+
+/// Writes all of `contents`, gives the file the mode of the file it replaces (if
+/// any) and fsyncs it.
+void write_contents(int fd, const std::string& contents, const std::string& path, const struct stat* replaced) {
+  const char* p = contents.data();
+  std::size_t left = contents.size();
+  while (left > 0) {
+    const ssize_t n = ::write(fd, p, left);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      const int err = errno;
+      throw DataError(path, 0, 0, "cannot write: " + errno_text(err));
+    }
+    p += n;
+    left -= static_cast<std::size_t>(n);
+  }
+  // Keep the permissions a user gave the file being replaced.
+  if (replaced != nullptr) (void)::fchmod(fd, replaced->st_mode & 07777);
+  if (::fsync(fd) != 0) {
+    const int err = errno;
+    throw DataError(path, 0, 0, "cannot write: fsync failed: " + errno_text(err));
+  }
+}
+
+/// Gives the complete unnamed (O_TMPFILE) file a fresh temporary name in `dir`;
+/// empty when the system refuses (no /proc, or a file system without linkat of
+/// unnamed files). AT_EMPTY_PATH needs CAP_DAC_READ_SEARCH, the /proc/self/fd path
+/// does not (open(2), "O_TMPFILE").
+std::string name_unnamed_file(int fd, const fs::path& dir, const fs::path& target) {
+  const std::string proc_path = "/proc/self/fd/" + std::to_string(fd);
+  for (int attempt = 0; attempt < 8; ++attempt) {
+    std::string tmp = temporary_name(dir, target);
+    if (::linkat(AT_FDCWD, proc_path.c_str(), AT_FDCWD, tmp.c_str(), AT_SYMLINK_FOLLOW) == 0) return tmp;
+    if (errno != EEXIST) break;
+  }
+  return {};
+}
+
+/// Closes the complete temporary, renames it over the target and makes the rename
+/// durable.
+void commit(TempFileGuard& guard, const std::string& tmp, const fs::path& target, const fs::path& dir,
+            const std::string& path) {
+  if (guard.close_checked() != 0) {
+    const int err = errno;
+    throw DataError(path, 0, 0, "cannot write: close failed: " + errno_text(err));
+  }
+  if (::rename(tmp.c_str(), target.c_str()) != 0) {
+    const int err = errno;
+    throw DataError(path, 0, 0, "cannot replace the file: " + errno_text(err));
+  }
+  guard.release();
+
+  // Some file systems refuse fsync on a directory (EINVAL), which does not make the
+  // write less complete.
+  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd >= 0) {
+    (void)::fsync(dfd);
+    ::close(dfd);
+  }
 }
 
 }  // namespace
@@ -85,13 +150,29 @@ void write_file_atomically(const std::string& path, const std::string& contents)
   struct stat old_stat {};
   const bool target_exists = ::stat(target.c_str(), &old_stat) == 0;
   if (target_exists && S_ISDIR(old_stat.st_mode)) throw DataError(path, 0, 0, "cannot write: the path is a directory");
+  const struct stat* replaced = target_exists ? &old_stat : nullptr;
+
+#ifdef O_TMPFILE
+  // Linux: the file has no name while it is written, so a run killed at any point
+  // (even by SIGKILL) leaves no partial file; it is named only when complete, an
+  // instant before the rename.
+  if (const int unnamed = ::open(dir.c_str(), O_TMPFILE | O_WRONLY | O_CLOEXEC, 0666); unnamed >= 0) {
+    TempFileGuard guard(unnamed);
+    write_contents(unnamed, contents, path, replaced);
+    if (std::string tmp = name_unnamed_file(unnamed, dir, target); !tmp.empty()) {
+      guard.set_name(tmp);
+      commit(guard, tmp, target, dir, path);
+      return;
+    }
+  }  // else (kernel or file system without O_TMPFILE, no /proc): a named temporary
+#endif
 
   // O_EXCL makes a name clash an error instead of a shared file; retry a few
   // times with a fresh random suffix.
   std::string tmp;
   int fd = -1;
   for (int attempt = 0; attempt < 8 && fd < 0; ++attempt) {
-    tmp = (dir / ("." + target.filename().string() + ".tmp." + unique_suffix())).string();
+    tmp = temporary_name(dir, target);
     fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd < 0 && errno != EEXIST) break;
   }
@@ -99,43 +180,10 @@ void write_file_atomically(const std::string& path, const std::string& contents)
     const int err = errno;
     throw DataError(path, 0, 0, "cannot write: cannot create a temporary file in '" + dir.string() + "': " + errno_text(err));
   }
-  TempFileGuard guard(tmp, fd);
-
-  const char* p = contents.data();
-  std::size_t left = contents.size();
-  while (left > 0) {
-    const ssize_t n = ::write(fd, p, left);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      const int err = errno;
-      throw DataError(path, 0, 0, "cannot write: " + errno_text(err));
-    }
-    p += n;
-    left -= static_cast<std::size_t>(n);
-  }
-  // Keep the permissions a user gave the file being replaced.
-  if (target_exists) (void)::fchmod(fd, old_stat.st_mode & 07777);
-  if (::fsync(fd) != 0) {
-    const int err = errno;
-    throw DataError(path, 0, 0, "cannot write: fsync failed: " + errno_text(err));
-  }
-  if (guard.close_checked() != 0) {
-    const int err = errno;
-    throw DataError(path, 0, 0, "cannot write: close failed: " + errno_text(err));
-  }
-  if (::rename(tmp.c_str(), target.c_str()) != 0) {
-    const int err = errno;
-    throw DataError(path, 0, 0, "cannot replace the file: " + errno_text(err));
-  }
-  guard.release();
-
-  // Make the rename itself durable; some file systems refuse fsync on a
-  // directory (EINVAL), which does not make the write less complete.
-  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dfd >= 0) {
-    (void)::fsync(dfd);
-    ::close(dfd);
-  }
+  TempFileGuard guard(fd);
+  guard.set_name(tmp);
+  write_contents(fd, contents, path, replaced);
+  commit(guard, tmp, target, dir, path);
 }
 
 std::string read_whole_file(const std::string& path) {
@@ -190,21 +238,43 @@ std::string read_whole_file(const std::string& path) {
   return out;
 }
 
+namespace {
+
+/// True when the two paths name the same file: equal weakly_canonical paths (so
+/// `./a.csv`, `dir/../a.csv` and symbolic links agree) or, when both exist,
+/// std::filesystem::equivalent (which also catches hard links).
+bool same_file(const std::string& a, const std::string& b) {
+  std::error_code ec_a, ec_b;
+  const fs::path a_canon = fs::weakly_canonical(fs::path(a), ec_a);
+  const fs::path b_canon = fs::weakly_canonical(fs::path(b), ec_b);
+  if (!ec_a && !ec_b && a_canon == b_canon) return true;
+  std::error_code ec_eq;
+  return fs::equivalent(fs::path(a), fs::path(b), ec_eq) && !ec_eq;
+}
+
+}  // namespace
+
 void refuse_to_overwrite_input(const std::string& out, const std::vector<std::string>& inputs) {
-  std::error_code ec;
-  const fs::path out_canon = fs::weakly_canonical(fs::path(out), ec);
-  const bool out_ok = !ec;
-  for (const auto& in : inputs) {
-    std::error_code ec_in;
-    const fs::path in_canon = fs::weakly_canonical(fs::path(in), ec_in);
-    bool same = out_ok && !ec_in && out_canon == in_canon;
-    if (!same) {
-      std::error_code ec_eq;
-      same = fs::equivalent(fs::path(out), fs::path(in), ec_eq) && !ec_eq;
-    }
-    if (same)
+  for (const auto& in : inputs)
+    if (same_file(out, in))
       throw std::invalid_argument("refusing to overwrite input file '" + in + "' with output '" + out +
                                   "': choose another output path");
+}
+
+void check_output_paths(const std::vector<std::string>& outputs, const std::vector<std::string>& inputs,
+                        bool replace_existing, const std::string& how_to_replace) {
+  for (std::size_t i = 0; i < outputs.size(); ++i) {
+    const std::string& out = outputs[i];
+    if (out.empty()) continue;
+    refuse_to_overwrite_input(out, inputs);
+    for (std::size_t j = 0; j < i; ++j)
+      if (!outputs[j].empty() && same_file(out, outputs[j]))
+        throw OutputConflictError("two outputs name the same file ('" + outputs[j] + "' and '" + out +
+                                    "'): one would replace the other");
+    std::error_code ec;
+    if (!replace_existing && fs::exists(fs::symlink_status(fs::path(out), ec)))
+      throw std::invalid_argument("output file '" + out + "' already exists; not replacing it" +
+                                  (how_to_replace.empty() ? std::string() : ": " + how_to_replace));
   }
 }
 

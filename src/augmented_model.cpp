@@ -89,10 +89,15 @@ void apply_hysteresis(double alpha, double beta, double gamma, Eigen::Ref<Eigen:
 /// w[k - d] with d = delay / Ts possibly fractional (linear interpolation) and
 /// zero (rest) before the first sample.
 void apply_delay(double delay_samples, Eigen::Ref<Eigen::VectorXd> w) {
+  if (!std::isfinite(delay_samples)) throw std::invalid_argument("time_delay: the delay is not a finite number");
   const Eigen::VectorXd original = w;
-  const auto whole = static_cast<Eigen::Index>(std::floor(delay_samples));
-  const double frac = delay_samples - static_cast<double>(whole);
-  auto at = [&](Eigen::Index k) { return k >= 0 ? original[k] : 0.0; };
+  // A delay beyond the record (either way) leaves nothing of it; clamping first
+  // keeps the conversion to an index defined (a file may say delay_s 1e300).
+  const double span = static_cast<double>(w.size()) + 1.0;
+  const double clamped = std::clamp(delay_samples, -span, span);
+  const auto whole = static_cast<Eigen::Index>(std::floor(clamped));
+  const double frac = clamped - static_cast<double>(whole);
+  auto at = [&](Eigen::Index k) { return k >= 0 && k < original.size() ? original[k] : 0.0; };
   for (Eigen::Index k = 0; k < w.size(); ++k) w[k] = (1.0 - frac) * at(k - whole) + frac * at(k - whole - 1);
 }
 

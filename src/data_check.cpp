@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "sysid/core/input_collinearity.hpp"
+#include "sysid/core/persistent_excitation.hpp"
 #include "sysid/pem/arx.hpp"
 #include "sysid/signal/polynomial_filter.hpp"
 #include "sysid/spectral/confidence.hpp"
@@ -47,20 +48,6 @@ ChannelCheck channel_statistics(const std::string& name, const Eigen::VectorXd& 
   return c;
 }
 
-/// Singular values (relative to the largest) of the mean-removed Hankel matrix of
-/// u with `columns` columns and at most `rows_max` rows, by QR then SVD of R.
-Eigen::VectorXd hankel_singular_values_of(const Eigen::VectorXd& u, Eigen::Index columns, Eigen::Index rows_max) {
-  const Eigen::Index rows = std::min<Eigen::Index>(u.size() - columns + 1, rows_max);
-  const Eigen::VectorXd centred = u.array() - u.mean();
-  Eigen::MatrixXd hankel(rows, columns);
-  for (Eigen::Index j = 0; j < columns; ++j) hankel.col(j) = centred.segment(columns - 1 - j, rows);
-  Eigen::HouseholderQR<Eigen::MatrixXd> qr(hankel);
-  const Eigen::MatrixXd r = qr.matrixQR().topRows(columns).triangularView<Eigen::Upper>();
-  Eigen::VectorXd s = Eigen::JacobiSVD<Eigen::MatrixXd>(r).singularValues();
-  if (s(0) > 0.0) s /= s(0);
-  return s;
-}
-
 }  // namespace
 
 DataCheckResult check_data(const IoData& data, const Eigen::VectorXd& time, const DataCheckOptions& o) {
@@ -81,19 +68,13 @@ DataCheckResult check_data(const IoData& data, const Eigen::VectorXd& time, cons
   for (Eigen::Index j = 0; j < m; ++j) {
     ChannelCheck c = channel_statistics(data.input_name(j), e.u.col(j));
     if (c.std > 0.0) {
-      c.excitation_singular_values = hankel_singular_values_of(e.u.col(j), o.max_excitation_order, o.excitation_samples);
-      // The order is where the singular values fall off a cliff (a drop of 40 dB or
-      // more from one to the next, to below the tolerance): k sinusoids give an
-      // exact rank 2k plus noise. A band-limited continuous spectrum (a chirp,
-      // filtered noise) decays smoothly instead — ill-conditioned by oversampling
-      // but exciting every order — and counts as the full n.
-      const Eigen::VectorXd& sv = c.excitation_singular_values;
-      c.excitation_order = sv.size();
-      for (Eigen::Index k = 0; k + 1 < sv.size(); ++k)
-        if (sv(k + 1) < o.excitation_tolerance && sv(k + 1) < 1e-2 * sv(k)) {
-          c.excitation_order = k + 1;
-          break;
-        }
+      ExcitationOrderOptions eo;
+      eo.max_order = o.max_excitation_order;
+      eo.tolerance = o.excitation_tolerance;
+      eo.max_samples = o.excitation_samples;
+      ExcitationOrder pe = excitation_order(data, j, eo);
+      c.excitation_order = pe.order;
+      c.excitation_singular_values = std::move(pe.singular_values);
     }
     if (c.excitation_order == 0)
       serious.push_back("input " + c.name + " is constant: it excites nothing, and no model of its effect can be identified");

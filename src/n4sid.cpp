@@ -1,7 +1,7 @@
 // Implementation of subspace/n4sid.hpp (the method and its references are in the header).
 // Compiled once into libsysid: the Eigen decompositions below are heavy to instantiate.
 #include <sysid/subspace/n4sid.hpp>
-#include <sysid/core/input_collinearity.hpp>
+#include <sysid/core/identification_warnings.hpp>
 
 #include <Eigen/Dense>
 #include <sysid/core/discrete_riccati.hpp>
@@ -447,7 +447,6 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
     }
     return c;
   };
-  for (auto& w : collinear_input_warnings(data, "n4sid")) res.warnings.push_back(std::move(w));
   if (res.decimation > 1) {
     // Zero-phase 8th-order Butterworth at 0.8 x the new Nyquist frequency on
     // inputs and outputs alike (their relation is unchanged), then every r-th sample.
@@ -470,6 +469,9 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
   res.past_future_min_sine = core.past_future_min_sine;
   res.oblique_dropped_directions = core.oblique_dropped_directions;
   res.warnings.insert(res.warnings.end(), core.warnings.begin(), core.warnings.end());
+  for (auto& w : identification_data_warnings(data, 2 * res.order,
+                                              "a state-space model of order " + std::to_string(res.order), "n4sid"))
+    res.warnings.push_back(std::move(w));
   const Eigen::Index n = res.order;
   const Eigen::MatrixXd& A = core.A;
   const Eigen::MatrixXd& C = core.C;
@@ -569,11 +571,8 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
     throw NumericalError("n4sid: the identified matrices contain NaN or Inf");
 
   // Stability and band checks.
-  const Eigen::VectorXcd ev = A.eigenvalues();
-  const double radius = ev.cwiseAbs().maxCoeff();
-  if (radius >= 1.0)
-    res.warnings.push_back("n4sid: the identified model is unstable (spectral radius " + std::to_string(radius) +
-                           "); consider enforce_stability");
+  for (auto& w : unstable_model_warnings(res.model, "n4sid", "enforce_stability (--enforce-stability) forces a stable A"))
+    res.warnings.push_back(std::move(w));
   const double lo = band_lo, hi = band_hi;
   if (hi < 0.8 * nyquist) {
     const double in_band = detail::peak_gain(res.model, std::max(lo, 0.0), hi, 200);

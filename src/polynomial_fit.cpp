@@ -1,5 +1,6 @@
 // Implementation of pem/polynomial_fit.hpp and pem/order_search.hpp (methods and references in the headers).
 #include <sysid/core/errors.hpp>
+#include <sysid/core/identification_warnings.hpp>
 #include <sysid/pem/order_search.hpp>
 #include <sysid/pem/polynomial_fit.hpp>
 #include <sysid/validate/compare.hpp>
@@ -27,6 +28,33 @@ const char* to_string(PolynomialStructure s) {
 bool has_inputs(PolynomialStructure s) {
   return s == PolynomialStructure::arx || s == PolynomialStructure::armax || s == PolynomialStructure::oe;
 }
+
+namespace {
+
+/// The data warnings (core/identification_warnings.hpp) for a structure other than
+/// ARX (arx() gives its own): the input must excite the numerator plus the
+/// denominator orders (Söderström & Stoica 1989, sec. 5.4).
+std::vector<std::string> data_warnings(const IoData& data, PolynomialStructure s, const PolynomialOrders& o) {
+  int nb = 0, nf = 0;
+  for (int v : o.nb) nb = std::max(nb, v);
+  for (int v : o.nf) nf = std::max(nf, v);
+  std::string model;
+  int required = 0;
+  switch (s) {
+    case PolynomialStructure::oe:
+      required = nb + nf;
+      model = "OE(nb " + std::to_string(nb) + ", nf " + std::to_string(nf) + ")";
+      break;
+    case PolynomialStructure::armax:
+      required = o.na + nb;
+      model = "ARMAX(na " + std::to_string(o.na) + ", nb " + std::to_string(nb) + ")";
+      break;
+    default: break;  // AR, ARMA: no input, only the output checks apply
+  }
+  return identification_data_warnings(data, has_inputs(s) ? required : 0, model, to_string(s));
+}
+
+}  // namespace
 
 
 PolynomialFit fit_polynomial(const IoData& data, const PolynomialFitOptions& options) {
@@ -56,7 +84,10 @@ PolynomialFit fit_polynomial(const IoData& data, const PolynomialFitOptions& opt
     fit.output_offset = r.output_offset;
     fit.warnings = std::move(r.warnings);
     fit.method_notes.assign(static_cast<std::size_t>(l), "linear least squares");
+    if (s == PolynomialStructure::ar)
+      for (auto& w : data_warnings(data, s, o)) fit.warnings.push_back(std::move(w));
   } else {
+    fit.warnings = data_warnings(data, s, o);
     PemOptions p;
     p.na = s == PolynomialStructure::oe ? 0 : o.na;
     p.nc = s == PolynomialStructure::oe ? 0 : o.nc;
@@ -91,6 +122,8 @@ PolynomialFit fit_polynomial(const IoData& data, const PolynomialFitOptions& opt
     // coefficients), made the maximum-likelihood RSS / N.
     const double p = static_cast<double>(pack_parameters(pm).size()), n = static_cast<double>(fit.samples);
     fit.loss.push_back(pm.noise_variance * std::max(0.0, n - p) / n);
+    for (auto& w : unstable_model_warnings(to_innovation_state_space(pm).model, to_string(s)))
+      fit.warnings.push_back(data.outputs() > 1 ? w + " (output " + data.output_name(r) + ")" : w);
   }
   return fit;
 }

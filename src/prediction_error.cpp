@@ -239,6 +239,13 @@ void hannan_rissanen(PolynomialModel& model, const std::vector<ScaledRecord>& re
   model.C = reflect_into_unit_circle(model.C);
 }
 
+/// The OE start's ARX denominator has roots outside the unit circle: the plant is
+/// likely unstable, which an output-error model (a simulation, kept stable during
+/// the iterations) cannot represent.
+constexpr const char* unstable_plant_warning =
+    "pem: the ARX estimate of F is unstable: the plant itself may be unstable, which an output-error model "
+    "cannot represent (its simulation diverges; F is kept stable); use arx, armax or n4sid for an unstable plant";
+
 /// OE start: ARX for F and B, then Steiglitz-McBride passes (scaled units).
 void output_error_start(PolynomialModel& model, const std::vector<ScaledRecord>& records, int passes,
                         std::vector<std::string>& warnings) {
@@ -260,6 +267,7 @@ void output_error_start(PolynomialModel& model, const std::vector<ScaledRecord>&
       const RegressionSolution sol = arx_regression(single, model.nf(i), {model.nb(i)}, {model.nk[k]}, nullptr, 0);
       model.F[k] = Eigen::VectorXd(model.nf(i) + 1);
       model.F[k] << 1.0, sol.theta.head(model.nf(i));
+      if (!strictly_stable(model.F[k])) warnings.push_back(unstable_plant_warning);
       model.F[k] = reflect_into_unit_circle(model.F[k]);
       model.B[k] = sol.theta.tail(model.nb(i));
     }
@@ -275,6 +283,8 @@ void output_error_start(PolynomialModel& model, const std::vector<ScaledRecord>&
     const RegressionSolution sol = arx_regression(filtered, nf_max, nb, model.nk, nullptr, 0);
     f = Eigen::VectorXd(nf_max + 1);
     f << 1.0, sol.theta.head(nf_max);
+    if (pass == 0 && !strictly_stable(f))
+      warnings.push_back(unstable_plant_warning);
     f = reflect_into_unit_circle(f);
     Eigen::Index at = nf_max;
     for (Eigen::Index i = 0; i < m; ++i) {

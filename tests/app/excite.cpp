@@ -12,7 +12,7 @@ namespace {
 CsvTable excite(const TempDir& dir, std::vector<std::string> args) {
   const std::string out = dir / "u.csv";
   args.insert(args.begin(), "excite");
-  args.insert(args.end(), {"--out", out});
+  args.insert(args.end(), {"--out", out, "--force"});  // tests call it repeatedly in one directory
   const CliResult r = run_cli(args);
   EXPECT_EQ(r.exit_code, 0) << describe(r);
   return read_csv(out);

@@ -90,7 +90,8 @@ TEST(SimulateApp, InitialStateZeroModelAndEstimate) {
   write_log(dir / "log.csv", {"u", "y"}, cols);
 
   auto run = [&](const std::vector<std::string>& extra) {
-    std::vector<std::string> args{"simulate", dir / "m.json", dir / "log.csv", "--out", dir / "sim.csv"};
+    // --force: each call replaces the previous run's output.
+    std::vector<std::string> args{"simulate", dir / "m.json", dir / "log.csv", "--out", dir / "sim.csv", "--force"};
     args.insert(args.end(), extra.begin(), extra.end());
     const CliResult r = run_cli(args);
     EXPECT_EQ(r.exit_code, 0) << describe(r);

@@ -165,4 +165,12 @@ TEST(CoreDiscretize, RejectsViolatedPreconditions) {
   EXPECT_NO_THROW(sysid::d2c_zoh(pair));
 }
 
+TEST(CoreDiscretize, SubnormalSampleTimeIsANumericalErrorNotACrash) {
+  // Found by fuzzing the augmented-model reader: Ts = 5e-324 made log(Phi) / Ts
+  // infinite and the StateSpace constructor threw an unexpected invalid_argument.
+  const sysid::StateSpace tiny(MatrixXd::Constant(1, 1, 0.5), MatrixXd::Ones(1, 1), MatrixXd::Ones(1, 1),
+                               MatrixXd::Zero(1, 1), 5e-324);
+  EXPECT_THROW(sysid::d2c_zoh(tiny), sysid::NumericalError);
+}
+
 }  // namespace

@@ -113,6 +113,17 @@ TEST(AugmentedModel, WholeSampleDelayShiftsAndFractionalDelayInterpolates) {
   EXPECT_LT(relative_error(half, 0.75 * y0 + 0.25 * y1), 1e-12);  // linear in the fraction
 }
 
+TEST(AugmentedModel, DelayLongerThanTheRecordLeavesNothing) {
+  // Found by fuzzing the augmented-model reader: delay_s 1e300 made the delay in
+  // samples overflow the index type (undefined behaviour). Any delay past the record
+  // delays everything out of it; the same for an advance.
+  const StateSpace d = sysid::c2d_zoh(oscillator(30, 0.05), kTs);
+  const MatrixXd u = test_input(200, 5);
+  const sysid::AugmentedSimulator sim(d);
+  for (double delay : {1e300, 1e6 * kTs, 300 * kTs})
+    EXPECT_EQ(sim.simulate({physics_block("time_delay", {{"delay_s", delay}})}, u).cwiseAbs().maxCoeff(), 0.0) << delay;
+}
+
 TEST(AugmentedModel, InputLagConvergesToTheExactCascade) {
   const StateSpace plant = oscillator(30, 0.02);
   const double corner = 150.0, wc = kTwoPi * corner;

@@ -290,6 +290,12 @@ MultiStepNlmsResult multistep_nlms(const Eigen::MatrixBase<DU>& u, const Eigen::
     throw std::invalid_argument("multistep_nlms: need u.rows() == y.rows() (" + std::to_string(u.rows()) +
                                 " != " + std::to_string(y.rows()) + ")");
   if (u.rows() < 1) throw std::invalid_argument("multistep_nlms: need at least one sample");
+  // Fewer samples than taps leave taps the data never reached: an FIR that only
+  // looks identified.
+  if (u.rows() < options.taps)
+    throw std::invalid_argument("multistep_nlms: " + std::to_string(u.rows()) + " samples cannot determine " +
+                                std::to_string(options.taps) + " taps: need at least as many samples as taps (about " +
+                                "10 per tap to converge)");
   const Eigen::Ref<const Eigen::MatrixXd> ur(u.derived());
   const Eigen::Ref<const Eigen::MatrixXd> yr(y.derived());
   if (!ur.allFinite() || !yr.allFinite()) throw std::invalid_argument("multistep_nlms: u and y must be finite");

@@ -10,17 +10,8 @@
 /// Of the time column (when given): irregular sampling and gaps.
 ///
 /// Method:
-/// - Excitation order: an input is persistently exciting of order n when the
-///   n x n covariance matrix of (u(t-1) .. u(t-n)) is non-singular (Ljung,
-///   "System Identification", 2nd ed., def. 13.2); the order is the number of
-///   singular values of the (mean-removed) data Hankel matrix of the input,
-///   n = max_excitation_order columns, before the first "cliff": a singular value
-///   below excitation_tolerance times the largest and 40 dB below its
-///   predecessor. A single sine gives 2, a sum of k sines 2k, white noise every n.
-///   A band-limited continuous spectrum (a chirp over 10 % of the Nyquist band)
-///   has smoothly decaying singular values — an ill-conditioned but exciting
-///   input — and counts as n. The singular values come from a QR of the Hankel
-///   matrix (no normal equations).
+/// - Excitation order: core/persistent_excitation.hpp (Hankel singular values of
+///   the input, n = max_excitation_order columns, cut at the first 40 dB "cliff").
 /// - Signal-to-noise: an ARX(na, nb) model of each output on all inputs (QR least
 ///   squares, pem/arx.hpp) with na = nb = noise_model_order; its one-step residual
 ///   variance lambda estimates the noise, SNR = (var y - lambda) / lambda. It

@@ -1,0 +1,85 @@
+// Isolated output spikes (see include/sysid/core/isolated_spikes.hpp).
+#include "sysid/core/isolated_spikes.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sysid {
+
+namespace {
+
+/// 1.4826 MAD of the first difference, or its RMS when the MAD is zero.
+double robust_difference_scale(const Eigen::VectorXd& x) {
+  const Eigen::Index n = x.size() - 1;
+  std::vector<double> d(static_cast<std::size_t>(n));
+  for (Eigen::Index t = 0; t < n; ++t) d[static_cast<std::size_t>(t)] = x(t + 1) - x(t);
+  auto median_of = [](std::vector<double> v) {
+    const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+    std::nth_element(v.begin(), mid, v.end());
+    return *mid;
+  };
+  const double centre = median_of(d);
+  std::vector<double> deviation(d.size());
+  double sum_sq = 0.0;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    deviation[i] = std::abs(d[i] - centre);
+    sum_sq += d[i] * d[i];
+  }
+  const double mad = 1.4826 * median_of(std::move(deviation));
+  return mad > 0.0 ? mad : std::sqrt(sum_sq / static_cast<double>(d.size()));
+}
+
+}  // namespace
+
+std::vector<Eigen::Index> isolated_spikes(const Eigen::VectorXd& x, double threshold) {
+  std::vector<Eigen::Index> spikes;
+  if (x.size() < 3 || !x.allFinite()) return spikes;
+  const double limit = threshold * robust_difference_scale(x);
+  if (!(limit > 0.0)) return spikes;
+  for (Eigen::Index t = 1; t + 1 < x.size(); ++t) {
+    const double a = x(t) - x(t - 1), b = x(t) - x(t + 1);
+    if (a * b > 0.0 && std::min(std::abs(a), std::abs(b)) > limit) spikes.push_back(t);
+  }
+  return spikes;
+}
+
+std::vector<std::string> isolated_spike_warnings(const IoData& data, const std::string& who,
+                                                 const IsolatedSpikeOptions& o) {
+  std::vector<std::string> out;
+  for (Eigen::Index i = 0; i < data.outputs(); ++i) {
+    std::vector<std::string> where;
+    Eigen::Index count = 0;
+    Eigen::Index offset = 0;  // sample index over the concatenated experiments
+    for (const auto& e : data.experiments) {
+      const Eigen::Index N = e.samples();
+      // Samples near a sudden input change: a step or impulse, by the same criterion
+      // on the input's differences (either one neighbour or both).
+      std::vector<bool> guarded(static_cast<std::size_t>(N), false);
+      for (Eigen::Index j = 0; j < e.u.cols() && N >= 3; ++j) {
+        const double limit = o.threshold * robust_difference_scale(e.u.col(j));
+        for (Eigen::Index t = 1; t < N; ++t)
+          if (std::abs(e.u(t, j) - e.u(t - 1, j)) > limit)
+            for (Eigen::Index k = std::max<Eigen::Index>(0, t - 1 - o.input_guard);
+                 k <= std::min<Eigen::Index>(N - 1, t + o.input_guard); ++k)
+              guarded[static_cast<std::size_t>(k)] = true;
+      }
+      for (Eigen::Index t : isolated_spikes(e.y.col(i), o.threshold)) {
+        if (guarded[static_cast<std::size_t>(t)]) continue;
+        if (++count <= 5) where.push_back(std::to_string(offset + t));
+      }
+      offset += N;
+    }
+    if (count == 0) continue;
+    std::string list;
+    for (const auto& w : where) list += (list.empty() ? "" : ", ") + w;
+    out.push_back((who.empty() ? std::string() : who + ": ") + "output " + data.output_name(i) + " has " +
+                  std::to_string(count) + " isolated spike" + (count > 1 ? "s" : "") + " (sample" +
+                  (count > 1 ? "s " : " ") + list + (count > 5 ? ", ..." : "") + ", counted from 0) more than " +
+                  std::to_string(static_cast<int>(o.threshold)) +
+                  " robust standard deviations from both neighbours: sensor glitches that a least-squares fit weighs "
+                  "like any other sample; remove or interpolate them before identifying");
+  }
+  return out;
+}
+
+}  // namespace sysid

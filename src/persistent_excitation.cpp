@@ -1,0 +1,97 @@
+// Order of persistent excitation (see include/sysid/core/persistent_excitation.hpp).
+#include "sysid/core/persistent_excitation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "sysid/core/errors.hpp"
+
+namespace sysid {
+
+ExcitationOrder excitation_order(const IoData& data, Eigen::Index input, const ExcitationOrderOptions& o) {
+  if (input < 0 || input >= data.inputs()) throw std::invalid_argument("excitation_order: no such input");
+  if (o.max_order < 1) throw std::invalid_argument("excitation_order: need max_order >= 1");
+  const Eigen::Index n = o.max_order;
+
+  // Mean over everything used, then the Hankel rows of each long-enough experiment.
+  double sum = 0.0, count = 0.0;
+  Eigen::Index rows = 0;
+  for (const auto& e : data.experiments) {
+    if (e.samples() < n) continue;
+    const Eigen::Index r = std::min(e.samples() - n + 1, std::max<Eigen::Index>(o.max_samples - rows, 0));
+    if (r == 0) break;
+    sum += e.u.col(input).head(r + n - 1).sum();
+    count += static_cast<double>(r + n - 1);
+    rows += r;
+  }
+  if (rows == 0) throw std::invalid_argument("excitation_order: every experiment is shorter than max_order");
+  const double mean = sum / count;
+
+  Eigen::MatrixXd hankel(rows, n);
+  Eigen::Index at = 0;
+  for (const auto& e : data.experiments) {
+    if (e.samples() < n || at == rows) continue;
+    const Eigen::Index r = std::min(e.samples() - n + 1, rows - at);
+    for (Eigen::Index j = 0; j < n; ++j)
+      hankel.col(j).segment(at, r) = e.u.col(input).segment(n - 1 - j, r).array() - mean;
+    at += r;
+  }
+
+  ExcitationOrder result;
+  if (hankel.cwiseAbs().maxCoeff() == 0.0) return result;  // constant
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(hankel);
+  const Eigen::MatrixXd r = qr.matrixQR().topRows(std::min(rows, n)).triangularView<Eigen::Upper>();
+  result.singular_values = Eigen::JacobiSVD<Eigen::MatrixXd>(r).singularValues();
+  result.singular_values /= result.singular_values(0);
+  // k sinusoids give an exact rank 2k plus noise: the order ends at a drop of 40 dB
+  // or more to below the tolerance. A smooth decay (continuous spectrum) is exciting.
+  const Eigen::VectorXd& sv = result.singular_values;
+  result.order = n;
+  for (Eigen::Index k = 0; k + 1 < sv.size(); ++k)
+    if (sv(k + 1) < o.tolerance && sv(k + 1) < 1e-2 * sv(k)) {
+      result.order = k + 1;
+      break;
+    }
+  if (sv.size() < n) result.order = std::min(result.order, sv.size());
+  return result;
+}
+
+std::vector<std::string> insufficient_excitation_warnings(const IoData& data, Eigen::Index required_order,
+                                                          const std::string& model, const std::string& who) {
+  std::vector<std::string> out;
+  if (required_order < 1) return out;
+  Eigen::Index longest = 0;
+  for (const auto& e : data.experiments) longest = std::max(longest, e.samples());
+  if (longest < required_order) return out;
+  ExcitationOrderOptions o;
+  o.max_order = required_order;
+  for (Eigen::Index j = 0; j < data.inputs(); ++j) {
+    const ExcitationOrder pe = excitation_order(data, j, o);
+    if (pe.order == 0 || pe.order >= required_order) continue;
+    out.push_back((who.empty() ? std::string() : who + ": ") + "input " + data.input_name(j) +
+                  " is persistently exciting of order " + std::to_string(pe.order) + " only (" +
+                  (pe.order <= 2 ? "a single sine" : "about " + std::to_string(pe.order / 2) + " sines") + "), but " +
+                  model + " needs order " + std::to_string(required_order) +
+                  ": the data determine the model only at the excited frequencies and the rest is noise; add "
+                  "frequencies to the excitation or lower the order");
+  }
+  return out;
+}
+
+void require_varying_inputs(const IoData& data, const std::string& who) {
+  for (Eigen::Index j = 0; j < data.inputs(); ++j) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const auto& e : data.experiments) {
+      if (e.samples() == 0) continue;
+      lo = std::min(lo, e.u.col(j).minCoeff());
+      hi = std::max(hi, e.u.col(j).maxCoeff());
+    }
+    if (hi - lo <= 1e-12 * std::max(std::abs(lo), std::abs(hi)))
+      throw DataError((who.empty() ? std::string() : who + ": ") + "input '" + data.input_name(j) +
+                      "' is constant: it does not excite the system");
+  }
+}
+
+}  // namespace sysid
