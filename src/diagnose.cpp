@@ -12,6 +12,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "sysid/core/identification_warnings.hpp"
 #include "sysid/spectral/confidence.hpp"
 #include "sysid/validate/fit.hpp"
 
@@ -105,6 +106,12 @@ void check_arguments(const AugmentedModel& nominal, const Eigen::Ref<const Eigen
   if (u.cols() != nominal.nominal.inputs() || y.cols() != nominal.nominal.outputs())
     throw std::invalid_argument("diagnose: the log's channels must match the nominal model's inputs and outputs");
   if (!u.allFinite() || !y.allFinite()) throw std::invalid_argument("diagnose: u and y must be finite");
+  const auto& names = nominal.nominal.output_names;
+  for (Eigen::Index i = 0; i < y.cols(); ++i)
+    if (!(y.col(i).maxCoeff() > y.col(i).minCoeff()))
+      throw std::invalid_argument("diagnose: output '" +
+                                  (i < static_cast<Eigen::Index>(names.size()) ? names[i] : "y" + std::to_string(i + 1)) +
+                                  "' is constant (a stuck or disconnected sensor?): there is nothing to compare the simulation with");
   if (!(o.fit_fraction > 0 && o.selection_fraction > 0 && o.fit_fraction + o.selection_fraction < 1))
     throw std::invalid_argument("diagnose: need fit_fraction, selection_fraction > 0 and their sum < 1");
   if (o.max_correlation_lag < 1) throw std::invalid_argument("diagnose: need max_correlation_lag >= 1");
@@ -115,6 +122,26 @@ void check_arguments(const AugmentedModel& nominal, const Eigen::Ref<const Eigen
   if (shortest < 200)
     throw std::invalid_argument("diagnose: need at least 200 samples in each of the fit, selection and validation segments (have " +
                                 std::to_string(shortest) + " in the shortest; record has " + std::to_string(s.total) + ")");
+}
+
+/// What the record cannot tell (issue 8, hostile data): a constant input does not
+/// test the simulation's response to it; an input exciting fewer frequencies than
+/// the model has modes tests it only there; plus the glitches and collinear inputs
+/// every identification warns about (core/identification_warnings.hpp).
+std::vector<std::string> record_warnings(const StateSpace& model, const Eigen::Ref<const Eigen::MatrixXd>& u,
+                                         const Eigen::Ref<const Eigen::MatrixXd>& y) {
+  const IoData data(u, y, model.Ts, model.input_names, model.output_names);
+  std::vector<std::string> out;
+  for (Eigen::Index j = 0; j < u.cols(); ++j)
+    if (!(u.col(j).maxCoeff() > u.col(j).minCoeff()))
+      out.push_back("diagnose: input '" + data.input_name(j) +
+                    "' is constant: the record does not test the simulation's response to it; only effects that do "
+                    "not depend on it (offset, drift, periodic disturbance) can be found");
+  const Eigen::Index order = model.A.rows();
+  for (auto& w : identification_data_warnings(data, 2 * order, "a test of the order-" + std::to_string(order) + " simulation model",
+                                              "diagnose"))
+    out.push_back(std::move(w));
+  return out;
 }
 
 /// The falsified band or residual peak a block explains, for the report's location.
@@ -193,6 +220,7 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
   Segments seg;
   check_arguments(nominal, u_raw, y_raw, o, seg);
   DiagnoseReport report;
+  report.warnings = record_warnings(nominal.nominal, u_raw, y_raw);
   report.fit_rows = seg.fit;
   report.estimation_rows = seg.estimation;
   const StateSpace& model = nominal.nominal;

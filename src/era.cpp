@@ -109,14 +109,19 @@ EraResult era(const std::vector<MarkovParameters>& experiments, const EraOptions
   Eigen::BDCSVD<Eigen::MatrixXd> svd(H0, Eigen::ComputeThinU | Eigen::ComputeThinV);
   res.singular_values = svd.singularValues();
   const Eigen::VectorXd& sv = res.singular_values;
-  if (!(sv[0] > 0.0)) throw NumericalError("era: all Markov parameters h[1..] are zero; nothing to realise");
+  if (!(sv[0] > 0.0))
+    throw std::invalid_argument("era: all Markov parameters h[1..] are zero (no response to the input): nothing to realise");
 
   int n = options.order;
   if (n > 0) {
     res.order_rule = "given by the user";
   } else {
     const int top = options.max_order > 0 ? std::min(options.max_order, rank_cap - 1) : rank_cap - 1;
-    if (top < 1) throw std::invalid_argument("era: automatic order needs min(alpha l, beta m) >= 2");
+    if (top < 1)
+      throw std::invalid_argument("era: " + std::to_string(M + 1) + " Markov parameters give a Hankel matrix of " +
+                                  std::to_string(rows) + " x " + std::to_string(cols) +
+                                  ", too small to choose an order (that needs min(alpha l, beta m) >= 2): give the order, "
+                                  "or a longer impulse response");
     if (options.rule == EraOrderRule::gap) {
       const OrderChoice choice = choose_order_by_gap(sv, top);
       n = choice.order;
@@ -152,9 +157,18 @@ EraResult era(const std::vector<MarkovParameters>& experiments, const EraOptions
   int unstable = 0;
   for (Eigen::Index i = 0; i < z.size(); ++i)
     if (std::abs(z[i]) >= 1.0) ++unstable;
-  if (unstable > 0)
-    res.warnings.push_back(std::to_string(unstable) + " unstable pole(s) (|z| >= 1) in the realisation: noisy or truncated "
-                                                      "Markov parameters, or too high an order");
+  if (unstable > 0) {
+    // A truly unstable system has growing Markov parameters; a stable one realised
+    // unstably points at the data or the order.
+    const std::size_t quarter = std::max<std::size_t>(1, mp.h.size() / 4);
+    double early = 0.0, late = 0.0;
+    for (std::size_t k = 1; k <= quarter && k < mp.h.size(); ++k) early += mp.h[k].squaredNorm();
+    for (std::size_t k = mp.h.size() - quarter; k < mp.h.size(); ++k) late += mp.h[k].squaredNorm();
+    res.warnings.push_back(std::to_string(unstable) + " unstable pole(s) (|z| >= 1) in the realisation: " +
+                           (late > early ? "the Markov parameters grow (last quarter " + std::to_string(std::sqrt(late / early)) +
+                                               " times the first in norm), so the system itself looks unstable"
+                                         : "noisy or truncated Markov parameters, or too high an order"));
+  }
   return res;
 }
 

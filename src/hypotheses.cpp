@@ -221,12 +221,29 @@ void add_mode_candidates(const Context& c, long j, long i, std::vector<Candidate
   }
 }
 
+/// The grid point whose effect, taken as is, explains most of the residual.
+/// Starts below every score: an effect larger than the residual explains a
+/// negative fraction (below -1 when the nominal is right), and the least bad grid
+/// point must still be returned as the optimiser's start.
+Candidate best_as_is(const Context& c, const std::vector<PhysicsBlock>& grid) {
+  Candidate best;
+  best.block = grid.front();
+  best.detector_score = -std::numeric_limits<double>::infinity();
+  for (const auto& b : grid) {
+    const double explained = c.explained_as_is(c.effect(b));
+    if (explained > best.detector_score) best.block = b, best.detector_score = explained;
+  }
+  return best;
+}
+
 void add_actuator_candidates(const Context& c, long j, std::vector<Candidate>& out) {
   const long out_channel = j < c.l ? j : 0;
   const Eigen::VectorXd uj = c.d.u.col(j);
   const double u_rms = c.rms(uj), u_max = uj.cwiseAbs().maxCoeff(), u_range = uj.maxCoeff() - uj.minCoeff();
   const double Ts = c.d.Ts;
-  if (!(u_rms > 0)) return;
+  // A constant input (zero or not) carries no evidence about the actuator: every
+  // effect below would be a constant too (and the Bouc-Wen scale 1/range infinite).
+  if (!(u_rms > 0) || !(u_range > 0)) return;
   out.push_back(linearised(c, make_block("time_delay", j, out_channel), "delay_s", 0.0, Ts,
                            {"delay_s", 0.0, c.o.max_delay_samples * Ts}, 1, "a delayed copy of the input"));
   {
@@ -249,14 +266,13 @@ void add_actuator_candidates(const Context& c, long j, std::vector<Candidate>& o
                            {"width", 0.0, u_max}, 1, "play at input reversals"));
   {
     // Saturation is not smooth where it vanishes (limit = max |u|): grid of limits.
-    Candidate best;
-    best.detector_score = -1;
+    std::vector<PhysicsBlock> grid;
     for (double q : {0.995, 0.98, 0.95, 0.9, 0.85, 0.8, 0.7}) {
       PhysicsBlock b = make_block("saturation", j, out_channel);
       b.params["limit"] = q * u_max;
-      const double explained = c.explained_as_is(c.effect(b));
-      if (explained > best.detector_score) best.block = b, best.detector_score = explained;
+      grid.push_back(b);
     }
+    Candidate best = best_as_is(c, grid);
     best.free = {{"limit", 0.3 * u_max, u_max}};
     best.detector_score = std::max(0.0, best.detector_score);
     best.evidence = "clipping the largest inputs explains " + percent(best.detector_score);
@@ -265,17 +281,16 @@ void add_actuator_candidates(const Context& c, long j, std::vector<Candidate>& o
   {
     // Bouc-Wen: loop width about alpha / (beta + gamma) in input units; grid over
     // the amplitude alpha and the loop's saturation scale.
-    Candidate best;
-    best.detector_score = -1;
+    std::vector<PhysicsBlock> grid;
     for (double alpha : {0.01, 0.03, 0.1, 0.3})
       for (double shape : {1.0, 4.0, 16.0}) {
         PhysicsBlock b = make_block("hysteresis", j, out_channel);
         b.params["alpha"] = alpha;
         b.params["beta"] = shape / u_range;
         b.params["gamma"] = shape / u_range;
-        const double explained = c.explained_as_is(c.effect(b));
-        if (explained > best.detector_score) best.block = b, best.detector_score = explained;
+        grid.push_back(b);
       }
+    Candidate best = best_as_is(c, grid);
     best.free = {{"alpha", 0.0, 0.6}, {"beta", 0.05 / u_range, 200.0 / u_range, true}, {"gamma", -50.0 / u_range, 200.0 / u_range}};
     best.detector_score = std::max(0.0, best.detector_score);
     best.evidence = "a hysteresis loop (Bouc-Wen) in the actuator explains " + percent(best.detector_score);
@@ -286,7 +301,7 @@ void add_actuator_candidates(const Context& c, long j, std::vector<Candidate>& o
 void add_plant_candidates(const Context& c, long j, long i, std::vector<Candidate>& out) {
   const Eigen::VectorXd uj = c.d.u.col(j);
   const double u_rms = c.rms(uj), u_max = uj.cwiseAbs().maxCoeff();
-  if (!(u_rms > 0)) return;
+  if (!(u_rms > 0) || !(uj.maxCoeff() > uj.minCoeff())) return;  // a constant input excites no motion
   const Eigen::VectorXd position = c.d.current.col(i);
   const double y_peak = std::max(position.cwiseAbs().maxCoeff(), kTiny);
   const int substeps = c.d.simulator->substeps();
