@@ -2,8 +2,11 @@
 // the inputs, Ljung-Box), verdicts in words, correlations to CSV.
 #include <sysid/io/atomic_file.hpp>
 #include <sysid/io/csv.hpp>
+#include <sysid/io/polynomial_model_file.hpp>
 #include <sysid/validate/residual_analysis.hpp>
 
+#include <algorithm>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -20,7 +23,7 @@ struct ResidArgs {
   LogArgs log;
   int max_lag = 25;
   double confidence = 0.99;
-  int noise_params = 0;
+  int noise_params = -1;  ///< -1: from the model file (noise_model_parameter_counts)
   std::string x0 = "estimate";
 };
 
@@ -72,6 +75,22 @@ void run_resid(const ResidArgs& a) {
                                                  "max-lag - noise-params)");
   claim_outputs({a.out}, {a.model_path, a.log_path});
   const ModelFile file = load_model(a.model_path);
+  int noise_params = a.noise_params;
+  if (noise_params < 0) {
+    const std::vector<Eigen::Index> counts = noise_model_parameter_counts(file, a.model_path);
+    noise_params = counts.empty() ? 0 : static_cast<int>(*std::max_element(counts.begin(), counts.end()));
+    if (!counts.empty()) {
+      if (noise_params >= a.max_lag)
+        throw CLI::ValidationError("--max-lag", "the model's noise model has " + std::to_string(noise_params) +
+                                                    " parameters (na + nc + nd): the Ljung-Box test needs --max-lag above "
+                                                    "that, or give --noise-params");
+      note(verb, "Ljung-Box degrees of freedom: " + std::to_string(a.max_lag) + " lags - " + std::to_string(noise_params) +
+                     " noise-model parameters (na + nc + nd of " + a.model_path +
+                     (std::adjacent_find(counts.begin(), counts.end(), std::not_equal_to<>()) != counts.end()
+                          ? ", the largest over the outputs" : std::string()) +
+                     "; --noise-params overrides)");
+    }
+  }
   const auto [inputs, outputs] = model_channels(a.log, file, true);
   const LoadedLog log = load_log(a.log_path, make_log_options(a.log, inputs, outputs));
   const StateSpace model = model_for_sample_time(file, log.data.Ts, a.model_path, verb);
@@ -94,7 +113,7 @@ void run_resid(const ResidArgs& a) {
   ResidualAnalysisOptions ro;
   ro.max_lag = a.max_lag;
   ro.confidence = a.confidence;
-  ro.noise_parameters = a.noise_params;
+  ro.noise_parameters = noise_params;
   ro.output_names = outputs;
   ro.input_names = inputs;
   const ResidualAnalysisResult r = analyze_residuals(residuals, data.u, ro);
@@ -156,9 +175,9 @@ Verb register_resid(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::Range(0.5, 0.999999));
   cmd->add_option("--noise-params", args->noise_params,
-                  "number of estimated noise-model parameters (e.g. na + nc of an ARMAX model), subtracted from the "
-                  "Ljung-Box degrees of freedom")
-      ->capture_default_str()
+                  "number of estimated noise-model parameters, subtracted from the Ljung-Box degrees of freedom "
+                  "(default: na + nc + nd of a polynomial model file, the largest over its outputs; 0 for a "
+                  "state-space model)")
       ->check(CLI::Range(0, 1000000));
   cmd->add_option("--x0", args->x0, "initial state: estimate (least squares on this log), zero, model (stored x0)")
       ->capture_default_str()

@@ -108,6 +108,28 @@ TEST(ResidApp, WrongPolesAreNotWhiteAndCorrelateWithTheInput) {
   EXPECT_NE(r.out.find("input dynamics the model misses"), std::string::npos) << r.out;
 }
 
+TEST(ResidApp, PolynomialModelsSubtractTheirNoiseParametersFromTheLjungBoxDof) {
+  LogAndTrueModel s;
+  // ARMAX(4, 4, 2): the noise model C / A has na + nc = 6 estimated parameters.
+  const std::string model = s.dir / "armax.json";
+  const CliResult fit = run_cli({"armax", s.dir / "log.csv", "--inputs", "u", "--outputs", "y", "--na", "4", "--nb", "4",
+                                 "--nc", "2", "--nk", "0", "--out", model});
+  ASSERT_EQ(fit.exit_code, 0) << describe(fit);
+  const CliResult r = run_cli({"resid", model, s.dir / "log.csv"});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_NE(r.out.find("(25 lags, 19 dof)"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("25 lags - 6 noise-model parameters"), std::string::npos) << r.err;
+  // --noise-params overrides the file; a state-space file subtracts nothing.
+  const CliResult given = run_cli({"resid", model, s.dir / "log.csv", "--noise-params", "2"});
+  EXPECT_NE(given.out.find("(25 lags, 23 dof)"), std::string::npos) << given.out;
+  const CliResult state_space = run_cli({"resid", s.dir / "true.json", s.dir / "log.csv"});
+  EXPECT_NE(state_space.out.find("(25 lags, 25 dof)"), std::string::npos) << state_space.out;
+  // More noise parameters than lags: exit 1 (usage) naming both.
+  const CliResult few = run_cli({"resid", model, s.dir / "log.csv", "--max-lag", "5"});
+  EXPECT_EQ(few.exit_code, 1) << describe(few);
+  EXPECT_NE(few.err.find("6 parameters"), std::string::npos) << few.err;
+}
+
 TEST(ResidApp, ModelWithoutKalmanGainUsesTheSimulationErrorAndSaysSo) {
   LogAndTrueModel s;
   write_model(s.dir / "nok.json", s.plant);

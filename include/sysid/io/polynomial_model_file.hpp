@@ -14,6 +14,7 @@
 /// The polynomials are in the backward shift q^-1 (pem/polynomial_model.hpp).
 /// The state space carries K (innovation form) and the noise covariance
 /// diag(noise_variance).
+#include <sysid/core/errors.hpp>
 #include <sysid/io/model_json.hpp>
 #include <sysid/pem/polynomial_model.hpp>
 
@@ -64,6 +65,34 @@ inline ModelFile polynomial_model_file(const std::vector<PolynomialModel>& model
   file.extra["nk"] = nk;
   file.extra["noise_variance"] = variance;
   return file;
+}
+
+/// Per output, the number of estimated parameters of the noise model
+/// H = C / (A D) of a polynomial model file: na + nc + nd (ARX: na; OE: 0; ARMA:
+/// na + nc). They are the p of the Ljung-Box test's chi2(h - p) when the residuals
+/// are the model's one-step prediction errors (Ljung & Box 1978; Box, Jenkins &
+/// Reinsel, Time Series Analysis, 4th ed., sec. 8.2.2). Empty for a file that is
+/// not "polynomial". Errors: sysid::DataError (naming `source_name`) when a
+/// coefficient list is missing or is not a list per output.
+inline std::vector<Eigen::Index> noise_model_parameter_counts(const ModelFile& file, const std::string& source_name) {
+  if (file.type != "polynomial") return {};
+  const Eigen::Index l = file.model.outputs();
+  std::vector<Eigen::Index> counts(static_cast<std::size_t>(l), 0);
+  for (const char* key : {"A", "C", "D"}) {
+    const auto it = file.extra.find(key);
+    if (it == file.extra.end() || !it->is_array() || it->size() != static_cast<std::size_t>(l))
+      throw DataError(source_name, 0, 0,
+                      std::string("polynomial model: expected \"") + key + "\" as a list of " + std::to_string(l) +
+                          " coefficient lists (one per output)");
+    for (std::size_t i = 0; i < counts.size(); ++i) {
+      const auto& poly = (*it)[i];
+      if (!poly.is_array() || poly.empty())
+        throw DataError(source_name, 0, 0, std::string("polynomial model: \"") + key + "\"[" + std::to_string(i) +
+                                               "] must be a non-empty list of coefficients [1, ...]");
+      counts[i] += static_cast<Eigen::Index>(poly.size()) - 1;  // the leading 1 is not estimated
+    }
+  }
+  return counts;
 }
 
 }  // namespace sysid
