@@ -127,6 +127,13 @@ std::vector<std::string> model_output_names(const ModelFile& file) {
   return names;
 }
 
+StateSpace named_model(const ModelFile& file) {
+  StateSpace s = file.model;
+  s.input_names = model_input_names(file);
+  s.output_names = model_output_names(file);
+  return s;
+}
+
 std::pair<double, double> parse_range(const std::string& text, const std::string& option_name) {
   const auto colon = text.find(':');
   if (colon == std::string::npos) throw CLI::ValidationError(option_name, "expected LO:HI, found '" + text + "'");

@@ -68,6 +68,8 @@ StateSpace model_for_sample_time(const ModelFile& file, double ts, const std::st
 /// The model's channel names: the given list, else the model's names (u1.., y1.. when absent).
 std::vector<std::string> model_input_names(const ModelFile& file);
 std::vector<std::string> model_output_names(const ModelFile& file);
+/// The model file's state space carrying those names (polynomial files included).
+StateSpace named_model(const ModelFile& file);
 
 /// Adds --force (replace existing output files) to a verb that writes files. The
 /// flag is the one process-wide setting claim_outputs() reads: one verb runs per process.

@@ -26,9 +26,7 @@ void run_assemble(const AssembleArgs& a) {
   std::vector<ModelFile> files;
   for (const auto& path : a.models) {
     files.push_back(load_model(path));
-    parts.push_back(files.back().model);
-    parts.back().input_names = model_input_names(files.back());
-    parts.back().output_names = model_output_names(files.back());
+    parts.push_back(named_model(files.back()));
   }
   ModelFile out;
   out.model = assemble_inputs(parts);

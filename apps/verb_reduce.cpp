@@ -17,25 +17,69 @@
 #include <sstream>
 
 #include "cli_common.hpp"
+#include "plot.hpp"
 #include "verbs.hpp"
 
 namespace sysid::cli {
 
 namespace {
 
-/// A model file's state space with its channel names (polynomial files included).
-StateSpace named_model(const ModelFile& file) {
-  StateSpace s = file.model;
-  s.input_names = model_input_names(file);
-  s.output_names = model_output_names(file);
-  return s;
-}
-
 struct HsvArgs {
-  std::string model_path;
+  std::string model_path, plot;
 };
 
+/// Two panels over the cut r: the Hankel singular values relative to the first,
+/// and the reduction-error figures of cutting there (the isolator paper's ratio and
+/// the H-inf bound relative to the largest HSV), with the paper's 0.4 % and 2 %
+/// marked.
+PlotFigure hsv_figure(const Eigen::VectorXd& values, const std::string& model_path) {
+  const Eigen::Index n = values.size();
+  const double total = values.sum();
+  Eigen::VectorXd r = Eigen::VectorXd::LinSpaced(n, 1.0, static_cast<double>(n)), ratio(n), bound(n);
+  double kept = 0.0;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    kept += values(k);
+    ratio(k) = std::max(0.0, total - kept) / total;
+    bound(k) = 2.0 * std::max(0.0, total - kept) / values(0);
+  }
+  PlotPanel sv;
+  sv.title = "Hankel singular values";
+  sv.xlabel = "state";
+  sv.ylabel = "hsv / hsv_1";
+  sv.logy = true;
+  auto curve = [](std::string title, Eigen::VectorXd x, Eigen::VectorXd y, std::string style) {
+    PlotCurve c;
+    c.title = std::move(title);
+    c.x = std::move(x);
+    c.y = std::move(y);
+    c.style = std::move(style);
+    return c;
+  };
+  sv.curves.push_back(curve("hsv / hsv_1", r, values / values(0), "linespoints"));
+  // A cut at r = n discards nothing (zero error, off a log axis): plot r < n.
+  PlotPanel cut;
+  cut.title = "error of the reduced model of order r";
+  cut.xlabel = "kept order r";
+  cut.ylabel = "relative error";
+  cut.logy = true;
+  const Eigen::Index m = std::max<Eigen::Index>(n - 1, 1);
+  cut.curves.push_back(curve("ratio (sum all - sum kept) / sum all", r.head(m), ratio.head(m), "linespoints"));
+  cut.curves.push_back(curve("H-inf bound 2 sum discarded / hsv_1", r.head(m), bound.head(m), "lines"));
+  for (double level : {0.004, 0.02}) {
+    PlotCurve line = curve(fmt(100.0 * level, 2) + " %", Eigen::Vector2d(1.0, static_cast<double>(n)),
+                           Eigen::Vector2d(level, level), "lines");
+    line.dashed = true;
+    line.color = 7;
+    cut.curves.push_back(std::move(line));
+  }
+  PlotFigure fig;
+  fig.title = "Hankel singular values of " + model_path;
+  fig.panels = {std::move(sv), std::move(cut)};
+  return fig;
+}
+
 void run_hsv(const HsvArgs& a) {
+  claim_outputs({a.plot}, {a.model_path});
   const ModelFile file = load_model(a.model_path);
   const HankelSingularValuesResult r = hankel_singular_values(named_model(file));
   const double total = r.values.sum();
@@ -58,6 +102,12 @@ void run_hsv(const HsvArgs& a) {
        "H-inf bound: 2 x sum of the discarded HSV)\n";
   std::cout << s.str();
   for (const auto& w : r.warnings) warn("hsv", w);
+  if (!a.plot.empty()) {
+    if (r.values.size() == 0 || !(r.values(0) > 0.0))
+      warn("hsv", "no plot: the model has no stable part with a nonzero Hankel singular value");
+    else
+      write_plot(hsv_figure(r.values, a.model_path), a.plot, "hsv");
+  }
 }
 
 struct ReduceArgs {
@@ -214,7 +264,11 @@ Verb register_hsv(CLI::App& app) {
   auto args = std::make_shared<HsvArgs>();
   CLI::App* cmd = app.add_subcommand("hsv", "Hankel singular values of a model, with the reduction error of every cut");
   cmd->add_option("model", args->model_path, "model file (JSON)")->required();
-  cmd->footer("Example:\n  sysid hsv avi112.json");
+  cmd->add_option("--plot", args->plot,
+                  "plot of the HSV and of the error figures of every cut, with 0.4 % and 2 % marked (.svg or .png; "
+                  "needs gnuplot)")
+      ->check(plot_path_validator());
+  cmd->footer("Example:\n  sysid hsv avi112.json --plot hsv.svg");
   return {cmd, [args] { run_hsv(*args); }};
 }
 

@@ -1,4 +1,4 @@
-// End-to-end: --plot on frf, compare, show and n4sid writes a valid SVG (root
+// End-to-end: --plot on frf, compare, show, n4sid and hsv writes a valid SVG (root
 // element <svg> in the SVG namespace, closed) or PNG (signature and IHDR chunk)
 // through gnuplot; without gnuplot the verbs still succeed and say how to get plots.
 #include <sysid/core/simulate.hpp>
@@ -97,6 +97,12 @@ TEST(PlotApp, EveryPlotKindIsAValidSvgOrPng) {
   r = run_cli({"n4sid", dir / "log.csv", "--inputs", "u", "--outputs", "y", "--order", "4", "--plot", dir / "sv.svg"});
   ASSERT_EQ(r.exit_code, 0) << describe(r);
   expect_valid_svg(dir / "sv.svg");
+
+  r = run_cli({"hsv", dir / "m.json", "--plot", dir / "hsv.svg"});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  expect_valid_svg(dir / "hsv.svg");
+  for (const std::string level : {"0.4 %", ">2 %<"})
+    EXPECT_NE(read_text_file(dir / "hsv.svg").find(level), std::string::npos) << level << " is not marked";
 
   r = run_cli({"show", dir / "m.json", "--plot", dir / "show.png"});
   ASSERT_EQ(r.exit_code, 0) << describe(r);
