@@ -145,7 +145,7 @@ void run_fem_compare(const CompareArgs& a) {
   const auto response = [&](const Eigen::VectorXd& f) {
     std::vector<Eigen::Index> in_band;
     for (Eigen::Index k = 0; k < f.size(); ++k)
-      if (f(k) >= lo && f(k) <= hi) in_band.push_back(k);
+      if (f(k) >= fo.f_lo_hz && f(k) <= fo.f_hi_hz) in_band.push_back(k);  // not lo/hi: clang 14 cannot capture bindings
     Eigen::VectorXd fb(static_cast<Eigen::Index>(in_band.size()));
     for (std::size_t q = 0; q < in_band.size(); ++q) fb(static_cast<Eigen::Index>(q)) = f(in_band[q]);
     const fem::SparseFrfResult r = fem::sparse_frf(model, fb);

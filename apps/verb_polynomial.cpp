@@ -114,7 +114,10 @@ void run_polynomial(Structure structure, const PolynomialArgs& a) {
   }
   OrderSearchOptions search;
   search.fit.structure = structure;
-  search.fit.ar_method = a.ar_method == "burg" ? ArMethod::burg : a.ar_method == "yw" ? ArMethod::yule_walker : ArMethod::least_squares;
+  search.fit.ar_method = a.ar_method == "burg"  ? ArMethod::burg
+                         : a.ar_method == "yw"  ? ArMethod::yule_walker
+                         : a.ar_method == "myw" ? ArMethod::modified_yule_walker
+                                                : ArMethod::least_squares;
   search.fit.max_iterations = a.max_iterations;
   const std::vector<PolynomialOrders> combos = order_combinations(grid, structure);
   std::ostringstream report;
@@ -223,9 +226,11 @@ Verb register_structure(CLI::App& app, Structure structure, const std::string& d
   if (structure == Structure::oe)
     cmd->add_option("--nf", args->nf, "order of F per input (one number or range, or one per input)")->required();
   if (structure == Structure::ar)
-    cmd->add_option("--method", args->ar_method, "ls (least squares), burg, or yw (Yule-Walker)")
+    cmd->add_option("--method", args->ar_method,
+                    "ls (least squares), burg, yw (Yule-Walker), or myw (modified Yule-Walker: lags na+1..5 na only, "
+                    "unbiased when the sensor adds white noise)")
         ->capture_default_str()
-        ->check(CLI::IsMember({"ls", "burg", "yw"}));
+        ->check(CLI::IsMember({"ls", "burg", "yw", "myw"}));
   if (structure == Structure::armax || structure == Structure::arma || structure == Structure::oe) {
     cmd->add_option("--max-iterations", args->max_iterations, "Gauss-Newton / Levenberg-Marquardt iterations at most")
         ->capture_default_str()

@@ -9,24 +9,29 @@
 //   par2_gw.csv                   disturbance path GW, eq. (5), white-noise driven
 //   avi8x8.csv, avi8x8_val.csv    8x8 lightly damped modal model (isolator-like)
 //   *_true.json                   the true models, for comparisons in tests
-#include <sysid/core/discretize.hpp>
+//
+// The 8x8 structure and the log writers are shared with the isolator
+// experiments' generator (isolator/example_data.hpp).
 #include <sysid/core/simulate.hpp>
 #include <sysid/core/transfer_function.hpp>
-#include <sysid/io/csv.hpp>
-#include <sysid/io/model_json.hpp>
 #include <sysid/signal/excitation.hpp>
 
 #include <cmath>
 #include <filesystem>
 #include <iostream>
-#include <numbers>
-#include <random>
 #include <string>
 #include <vector>
+
+#include "isolator/example_data.hpp"
 
 namespace {
 
 using sysid::StateSpace;
+using sysid::example_data::add_noise;
+using sysid::example_data::avi8x8;
+using sysid::example_data::gaussian;
+using sysid::example_data::write_log;
+using sysid::example_data::write_model;
 
 Eigen::VectorXd quadratic(double a1, double a0) {
   Eigen::VectorXd p(3);
@@ -70,80 +75,6 @@ StateSpace par2_gw() {
   g.input_names = {"e"};
   g.output_names = {"y"};
   return g;
-}
-
-/// 8 actuators, 8 velocity sensors, 8 lightly damped modes between 18 and 330 Hz
-/// (continuous modal model, then exact ZOH at 1024 Hz).
-StateSpace avi8x8() {
-  const int modes = 8, channels = 8;
-  const double freqs[modes] = {18.0, 31.0, 47.0, 66.0, 95.0, 140.0, 210.0, 330.0};
-  const double zetas[modes] = {0.010, 0.015, 0.012, 0.020, 0.018, 0.025, 0.020, 0.030};
-  std::mt19937_64 rng(8088);
-  std::uniform_real_distribution<double> shape(-1.0, 1.0);
-  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(2 * modes, 2 * modes), b = Eigen::MatrixXd::Zero(2 * modes, channels),
-                  c = Eigen::MatrixXd::Zero(channels, 2 * modes);
-  for (int k = 0; k < modes; ++k) {
-    const double w = 2.0 * std::numbers::pi * freqs[k];
-    // state [q_k; dq_k/dt]: q'' + 2 zeta w q' + w^2 q = phi_in^T f
-    a(2 * k, 2 * k + 1) = 1.0;
-    a(2 * k + 1, 2 * k) = -w * w;
-    a(2 * k + 1, 2 * k + 1) = -2.0 * zetas[k] * w;
-    for (int j = 0; j < channels; ++j) {
-      b(2 * k + 1, j) = shape(rng) * 100.0;  // modal participation of actuator j
-      c(j, 2 * k + 1) = shape(rng);          // sensor j measures velocity of mode k
-    }
-  }
-  StateSpace cont(a, b, c, Eigen::MatrixXd::Zero(channels, channels), 0.0);
-  StateSpace g = sysid::c2d_zoh(cont, 1.0 / 1024.0);
-  for (int j = 0; j < channels; ++j) {
-    g.input_names.push_back("u" + std::to_string(j + 1));
-    g.output_names.push_back("y" + std::to_string(j + 1));
-  }
-  return g;
-}
-
-Eigen::MatrixXd gaussian(Eigen::Index rows, Eigen::Index cols, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g(0.0, 1.0);
-  Eigen::MatrixXd x(rows, cols);
-  for (Eigen::Index r = 0; r < rows; ++r)
-    for (Eigen::Index c = 0; c < cols; ++c) x(r, c) = g(rng);
-  return x;
-}
-
-/// Adds white measurement noise with the given fraction of each channel's RMS.
-void add_noise(Eigen::MatrixXd& y, double fraction, std::uint64_t seed) {
-  const Eigen::MatrixXd e = gaussian(y.rows(), y.cols(), seed);
-  for (Eigen::Index c = 0; c < y.cols(); ++c) {
-    const double rms = std::sqrt(y.col(c).squaredNorm() / static_cast<double>(y.rows()));
-    y.col(c) += fraction * rms * e.col(c);
-  }
-}
-
-void write_log(const std::filesystem::path& path, double ts, const std::vector<std::string>& names,
-               const std::vector<const Eigen::MatrixXd*>& blocks) {
-  Eigen::Index cols = 1;
-  for (const auto* b : blocks) cols += b->cols();
-  const Eigen::Index rows = blocks.front()->rows();
-  Eigen::MatrixXd table(rows, cols);
-  table.col(0) = Eigen::VectorXd::LinSpaced(rows, 0.0, static_cast<double>(rows - 1)) * ts;
-  Eigen::Index at = 1;
-  for (const auto* b : blocks) {
-    table.middleCols(at, b->cols()) = *b;
-    at += b->cols();
-  }
-  std::vector<std::string> all{"t"};
-  all.insert(all.end(), names.begin(), names.end());
-  sysid::write_csv(path.string(), all, table);
-  std::cout << "wrote " << path.string() << " (" << rows << " samples)\n";
-}
-
-void write_model(const std::filesystem::path& path, const StateSpace& g, const std::string& what) {
-  sysid::ModelFile file;
-  file.model = g;
-  file.provenance = {{"method", "true model"}, {"source", what}};
-  sysid::write_model_json(path.string(), file);
-  std::cout << "wrote " << path.string() << "\n";
 }
 
 }  // namespace

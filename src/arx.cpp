@@ -43,6 +43,34 @@ std::vector<Eigen::MatrixXd> output_signals(const IoData& data, Eigen::Index r, 
   return s;
 }
 
+/// Biased sample autocorrelation r(0..max_lag) pooled over experiments: each
+/// lag's products summed inside every series, divided by the total samples.
+Eigen::VectorXd pooled_autocorrelation(const std::vector<Eigen::VectorXd>& series, int max_lag) {
+  Eigen::VectorXd acf = Eigen::VectorXd::Zero(max_lag + 1);
+  double count = 0;
+  for (const auto& x : series) {
+    for (int k = 0; k <= max_lag && k < x.size(); ++k) acf(k) += x.head(x.size() - k).dot(x.tail(x.size() - k));
+    count += static_cast<double>(x.size());
+  }
+  return acf / count;
+}
+
+/// The overdetermined modified Yule-Walker equations (Stoica & Moses 2005, eq.
+/// 3.7.6): for k = na+1 .. na+M, sum_{j=1}^{na} a_j r(k - j) = -r(k); least squares
+/// by column-pivoting QR. Returns A = [1, a_1 .. a_na].
+Eigen::VectorXd modified_yule_walker(const Eigen::VectorXd& r, int na, int equations) {
+  Eigen::MatrixXd R(equations, na);
+  Eigen::VectorXd rhs(equations);
+  for (int i = 0; i < equations; ++i) {
+    const int k = na + 1 + i;
+    for (int j = 1; j <= na; ++j) R(i, j - 1) = r(k - j);
+    rhs(i) = -r(k);
+  }
+  Eigen::VectorXd a(na + 1);
+  a << 1.0, R.colPivHouseholderQr().solve(rhs);
+  return a;
+}
+
 /// Levinson-Durbin on autocorrelation r(0..na): A = [1, a_1..a_na] and the final prediction-error variance.
 std::pair<Eigen::VectorXd, double> levinson_durbin(const Eigen::VectorXd& r, int na) {
   Eigen::VectorXd a = Eigen::VectorXd::Zero(na + 1);
@@ -174,16 +202,27 @@ LinearPolynomialResult ar(IoData data, const ArOptions& options) {
       }
       if (shortest <= options.na) throw std::invalid_argument("ar: need more samples than na in every experiment");
       if (options.method == ArMethod::yule_walker) {
-        // Biased autocorrelation pooled over experiments (positive definite Toeplitz: stable A).
-        Eigen::VectorXd acf = Eigen::VectorXd::Zero(options.na + 1);
-        double count = 0;
-        for (const auto& x : series) {
-          for (int k = 0; k <= options.na; ++k) acf(k) += x.head(x.size() - k).dot(x.tail(x.size() - k));
-          count += static_cast<double>(x.size());
-        }
-        acf /= count;
+        // Biased autocorrelation (positive definite Toeplitz: stable A).
+        const Eigen::VectorXd acf = detail::pooled_autocorrelation(series, options.na);
         if (!(acf(0) > 0)) throw DataError("ar: output '" + data.output_name(r) + "' is constant");
         std::tie(model.A, model.noise_variance) = detail::levinson_durbin(acf, options.na);
+      } else if (options.method == ArMethod::modified_yule_walker) {
+        const int equations = options.modified_yule_walker_equations > 0 ? options.modified_yule_walker_equations : 4 * options.na;
+        if (shortest <= options.na + equations)
+          throw std::invalid_argument("ar: the modified Yule-Walker method needs more samples than na + equations (" +
+                                      std::to_string(options.na + equations) + ") in every experiment");
+        const Eigen::VectorXd acf = detail::pooled_autocorrelation(series, options.na + equations);
+        if (!(acf(0) > 0)) throw DataError("ar: output '" + data.output_name(r) + "' is constant");
+        model.A = detail::modified_yule_walker(acf, options.na, equations);
+        // Variance of A(q) y over every experiment (lags inside each series only).
+        double sum = 0, count = 0;
+        for (const auto& x : series)
+          for (Eigen::Index t = options.na; t < x.size(); ++t) {
+            const double e = model.A.dot(x.segment(t - options.na, options.na + 1).reverse());
+            sum += e * e;
+            count += 1;
+          }
+        model.noise_variance = sum / count;
       } else {
         std::tie(model.A, model.noise_variance) = detail::burg(series, options.na);
       }

@@ -36,9 +36,24 @@ std::vector<Eigen::Index> isolated_spikes(const Eigen::VectorXd& x, double thres
   if (x.size() < 3 || !x.allFinite()) return spikes;
   const double limit = threshold * robust_difference_scale(x);
   if (!(limit > 0.0)) return spikes;
-  for (Eigen::Index t = 1; t + 1 < x.size(); ++t) {
+  // Isolated also means large against the local activity: the RMS of the other
+  // first differences within kLocalHalfWidth samples. A burst of ringing near the
+  // Nyquist rate (a hammer tap exciting a high mode) has peaks that depart from
+  // both neighbours by many global sigmas, but its neighbourhood moves as much; a
+  // glitch stands out of its neighbourhood. Prefix sums make it O(N).
+  constexpr Eigen::Index kLocalHalfWidth = 8;
+  const Eigen::Index N = x.size();
+  Eigen::VectorXd energy = Eigen::VectorXd::Zero(N);  // energy(k) = sum of d_j^2, j < k
+  for (Eigen::Index k = 0; k + 1 < N; ++k) energy(k + 1) = energy(k) + (x(k + 1) - x(k)) * (x(k + 1) - x(k));
+  for (Eigen::Index t = 1; t + 1 < N; ++t) {
     const double a = x(t) - x(t - 1), b = x(t) - x(t + 1);
-    if (a * b > 0.0 && std::min(std::abs(a), std::abs(b)) > limit) spikes.push_back(t);
+    const double step = std::min(std::abs(a), std::abs(b));
+    if (!(a * b > 0.0 && step > limit)) continue;
+    const Eigen::Index lo = std::max<Eigen::Index>(0, t - 1 - kLocalHalfWidth), hi = std::min(N - 1, t + 1 + kLocalHalfWidth);
+    const double others = energy(hi) - energy(lo) - a * a - b * b;  // differences lo..hi-1 but d_{t-1}, d_t
+    const double count = static_cast<double>(hi - lo - 2);
+    const double local = count > 0 ? std::sqrt(std::max(others, 0.0) / count) : 0.0;
+    if (step > threshold * local) spikes.push_back(t);
   }
   return spikes;
 }

@@ -75,7 +75,9 @@ ZeroReducedSystem reduce_for_zeros(Eigen::MatrixXd A, Eigen::MatrixXd B, Eigen::
     Eigen::MatrixXd An = Av.topLeftCorner(nr, nr);
     Eigen::MatrixXd Bn = Bv.topRows(nr);
     Eigen::MatrixXd Cn(rho + sigma, nr), Dn(rho + sigma, m);
-    Cn << Av.bottomLeftCorner(rho, nr), C1v.leftCols(nr);
+    // With no state left (nr = 0) Cn is empty: filling it by blocks would offset
+    // its null data pointer (undefined behaviour, found by UBSan).
+    if (nr > 0) Cn << Av.bottomLeftCorner(rho, nr), C1v.leftCols(nr);
     Dn << Bv.bottomRows(rho), D1;
     A = std::move(An);
     B = std::move(Bn);

@@ -1,9 +1,13 @@
 // Acceptance of the prediction-error issue on the Par2 disturbance log
 // (GW of eq. 5 driven by white noise, 1 % output noise): ARMA(16,8) finds both
 // resonances of eq. (5), and its innovation model reduced to order 4 by modal
-// truncation of the 20-40 Hz band keeps each within 1 % in frequency.
+// truncation of the 20-40 Hz band keeps each within 1 % in frequency; AR(16)
+// does the same when estimated by the modified Yule-Walker method (least squares,
+// Burg and Yule-Walker resolve only the 25.9 Hz mode on this log: the sensor
+// noise makes it ARMA(4, 4), data/README.md).
 #include <sysid/core/modal_table.hpp>
 #include <sysid/io/csv.hpp>
+#include <sysid/pem/arx.hpp>
 #include <sysid/pem/polynomial_model.hpp>
 #include <sysid/pem/prediction_error.hpp>
 #include <sysid/reduce/modal_truncation.hpp>
@@ -29,18 +33,11 @@ std::vector<double> true_frequencies_hz() {
   return f;  // about 25.88 Hz and 31.90 Hz
 }
 
-}  // namespace
-
-TEST(Par2Disturbance, Arma16ReducedToOrder4KeepsBothResonancesWithinOnePercent) {
-  LogOptions lo;
-  lo.outputs = {"y"};
-  const IoData data = read_log(std::string(SYSID_TEST_DATA_DIR) + "/par2_gw.csv", lo);
-  PemOptions o;
-  o.na = 16;
-  o.nc = 8;
-  const PemResult r = pem(data, o);
-  ASSERT_EQ(r.status, PemResult::Status::converged) << r.termination;
-  const InnovationStateSpace ss = to_innovation_state_space(r.model);
+/// The 20-40 Hz modes of a time-series model A(q) y = C(q) e, after modal
+/// truncation of its innovation form to that band (keeping the DC gain), checked
+/// against eq. (5) within 1 % in natural frequency.
+void expect_both_resonances_within_one_percent(const PolynomialModel& model, const std::string& what) {
+  const InnovationStateSpace ss = to_innovation_state_space(model);
   // The time series' innovation form: input = the innovation.
   const StateSpace noise_model(ss.model.A, ss.K, ss.model.C, Eigen::MatrixXd::Identity(1, 1), ss.model.Ts);
   ModalTruncationOptions mo;
@@ -48,12 +45,35 @@ TEST(Par2Disturbance, Arma16ReducedToOrder4KeepsBothResonancesWithinOnePercent) 
   mo.f_hi_hz = 40.0;
   mo.keep_dc_gain = true;
   const ReductionResult reduced = modal_truncation(noise_model, mo);
-  EXPECT_EQ(reduced.order, 4);
+  EXPECT_EQ(reduced.order, 4) << what;
   const auto modes = modal_table(reduced.model);
-  ASSERT_EQ(modes.size(), 2u);
+  ASSERT_EQ(modes.size(), 2u) << what;
   const std::vector<double> truth = true_frequencies_hz();
   for (std::size_t k = 0; k < 2; ++k) {
-    std::cout << "mode " << k + 1 << ": " << modes[k].freq_hz << " Hz (eq. 5: " << truth[k] << " Hz), damping " << modes[k].damping << "\n";
-    EXPECT_LT(std::abs(modes[k].freq_hz - truth[k]) / truth[k], 0.01);
+    std::cout << what << " mode " << k + 1 << ": " << modes[k].freq_hz << " Hz (eq. 5: " << truth[k] << " Hz), damping "
+              << modes[k].damping << "\n";
+    EXPECT_LT(std::abs(modes[k].freq_hz - truth[k]) / truth[k], 0.01) << what;
   }
+}
+
+IoData disturbance_log() {
+  LogOptions lo;
+  lo.outputs = {"y"};
+  return read_log(std::string(SYSID_TEST_DATA_DIR) + "/par2_gw.csv", lo);
+}
+
+}  // namespace
+
+TEST(Par2Disturbance, Ar16ByModifiedYuleWalkerReducedToOrder4KeepsBothResonancesWithinOnePercent) {
+  const LinearPolynomialResult r = ar(disturbance_log(), {.na = 16, .method = ArMethod::modified_yule_walker});
+  expect_both_resonances_within_one_percent(r.models.front(), "AR(16), modified Yule-Walker");
+}
+
+TEST(Par2Disturbance, Arma16ReducedToOrder4KeepsBothResonancesWithinOnePercent) {
+  PemOptions o;
+  o.na = 16;
+  o.nc = 8;
+  const PemResult r = pem(disturbance_log(), o);
+  ASSERT_EQ(r.status, PemResult::Status::converged) << r.termination;
+  expect_both_resonances_within_one_percent(r.model, "ARMA(16, 8)");
 }

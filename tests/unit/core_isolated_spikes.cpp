@@ -39,6 +39,22 @@ TEST(IsolatedSpikes, FindsGlitchesAndOnlyThem) {
   EXPECT_EQ(spikes[1], 4000);
 }
 
+TEST(IsolatedSpikes, RingingNearNyquistAfterATapIsNotASpike) {
+  // A 330 Hz mode (damping 2 %) at 1024 Hz, struck every 5 s in low noise: about
+  // three samples per period, so the peaks depart from both neighbours by far
+  // more than the quiet part's scale, yet every step around them is large too.
+  const Eigen::Index n = 20480;
+  VectorXd y = white(n, 5, 1e-4);
+  const double w = 2.0 * std::numbers::pi * 330.0 / 1024.0, decay = 0.02 * w;
+  for (Eigen::Index tap : {1000, 6120, 11240, 16360})
+    for (Eigen::Index k = 0; k < 400; ++k)
+      y(tap + k) += std::exp(-decay * static_cast<double>(k)) * std::sin(w * static_cast<double>(k));
+  EXPECT_TRUE(sysid::isolated_spikes(y).empty());
+  y(9000) += 0.5;  // a glitch in the quiet part is still found
+  ASSERT_EQ(sysid::isolated_spikes(y).size(), 1u);
+  EXPECT_EQ(sysid::isolated_spikes(y).front(), 9000);
+}
+
 TEST(IsolatedSpikes, WhiteNoiseAndStepsAreNotSpikes) {
   // 10^5 Gaussian samples: no false alarm at 12 sigma of the difference.
   EXPECT_TRUE(sysid::isolated_spikes(white(100000, 2)).empty());

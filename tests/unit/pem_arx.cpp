@@ -1,6 +1,7 @@
 // ARX and AR estimation (pem/arx.hpp): exact recovery without noise,
-// recovery within the reported standard errors with noise, the three AR
-// methods agreeing, experiments pooled, and bad orders rejected.
+// recovery within the reported standard errors with noise, the AR methods
+// agreeing, the modified Yule-Walker method unbiased under sensor noise,
+// experiments pooled, and bad orders rejected.
 #include <sysid/pem/arx.hpp>
 #include <sysid/signal/polynomial_filter.hpp>
 
@@ -101,6 +102,29 @@ TEST(Ar, BurgAndYuleWalkerAreStableOnShortNoisyRecords) {
       EXPECT_LT(companion.eigenvalues().cwiseAbs().maxCoeff(), 1.0) << "seed " << seed;
     }
   }
+}
+
+TEST(Ar, ModifiedYuleWalkerIsUnbiasedUnderWhiteSensorNoise) {
+  // An AR(2) process seen through a sensor adding white noise of 30 % of its RMS
+  // is ARMA(2, 2): least squares (and Yule-Walker, Burg) are biased towards the
+  // noise floor, the modified Yule-Walker equations (lags >= na + 1) are not.
+  const Eigen::Index n = 200000;
+  const Eigen::VectorXd x = filter_polynomial(Eigen::VectorXd::Ones(1), kA, test::white_noise(n, 1, 8)).col(0);
+  const double rms = std::sqrt(x.squaredNorm() / static_cast<double>(n));
+  const Eigen::VectorXd y = x + 0.3 * rms * test::white_noise(n, 1, 9).col(0);
+  IoData data(Eigen::MatrixXd(n, 0), y, 1.0);
+  const Eigen::VectorXd ls = ar(data, {.na = 2, .method = ArMethod::least_squares}).models[0].A;
+  const Eigen::VectorXd myw = ar(data, {.na = 2, .method = ArMethod::modified_yule_walker}).models[0].A;
+  EXPECT_GT((ls - kA).cwiseAbs().maxCoeff(), 0.1) << "least squares should be visibly biased: " << ls.transpose();
+  EXPECT_LT((myw - kA).cwiseAbs().maxCoeff(), 0.02) << myw.transpose();
+  // Without sensor noise it agrees with the others.
+  IoData clean(Eigen::MatrixXd(n, 0), x, 1.0);
+  const LinearPolynomialResult r = ar(clean, {.na = 2, .method = ArMethod::modified_yule_walker});
+  EXPECT_LT((r.models[0].A - kA).cwiseAbs().maxCoeff(), 0.02) << r.models[0].A.transpose();
+  EXPECT_NEAR(r.models[0].noise_variance, 1.0, 0.03);
+  // Too short for na + M lags: a clear error.
+  IoData tiny(Eigen::MatrixXd(9, 0), y.head(9), 1.0);
+  EXPECT_THROW(ar(tiny, {.na = 2, .method = ArMethod::modified_yule_walker}), std::invalid_argument);
 }
 
 TEST(Arx, BadOrdersAreRejected) {

@@ -7,7 +7,9 @@
 /// Method: sample t is an isolated spike when it departs from both neighbours in
 /// the same direction, each step more than `threshold` robust standard deviations
 /// of the first difference: a = y(t) - y(t-1), b = y(t) - y(t+1), sign(a) =
-/// sign(b), min(|a|, |b|) > threshold sigma, with sigma = 1.4826 MAD(diff y) (the
+/// sign(b), min(|a|, |b|) > threshold sigma and > threshold times the RMS of the
+/// other first differences within 8 samples (a burst of ringing near Nyquist has
+/// large steps all around; a glitch only at t), with sigma = 1.4826 MAD(diff y) (the
 /// median absolute deviation scaled to a Gaussian's sigma; the RMS of the
 /// differences when the MAD is zero, as for quantised or mostly constant signals).
 /// A step is not a spike (it departs from one neighbour only); the smooth response

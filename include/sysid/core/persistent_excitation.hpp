@@ -50,7 +50,8 @@ ExcitationOrder excitation_order(const IoData& data, Eigen::Index input, const E
 /// naming the model (`model`, e.g. "ARX(8, 8)") and what the input supports. `who`
 /// prefixes the message ("arx: ..."; empty: no prefix). Experiments shorter than the
 /// required order are skipped; an input that is constant over all experiments is
-/// left to the algorithms (they refuse it with their own error).
+/// left to the algorithms (they refuse it with their own error). Orders above 256
+/// are not tested (cost O(samples n^2)): an input exciting 256 orders passes.
 std::vector<std::string> insufficient_excitation_warnings(const IoData& data, Eigen::Index required_order,
                                                           const std::string& model, const std::string& who);
 

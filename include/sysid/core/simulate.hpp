@@ -54,7 +54,11 @@ inline void simulate_block(const StateSpace& sys, const Eigen::Ref<const Eigen::
   states.col(0) = x;
   if (b > 1) states.rightCols(b - 1).noalias() = sys.B * u.topRows(b - 1).transpose();
   for (Eigen::Index k = 0; k + 1 < b; ++k) states.col(k + 1).noalias() += sys.A * states.col(k);
-  x.noalias() = sys.B * u.row(b - 1).transpose();
+  // An input-free model (AR, ARMA: m = 0) has an empty u whose data pointer is
+  // null: forming a row of it would offset that pointer (undefined behaviour,
+  // found by UBSan).
+  if (u.cols() > 0) x.noalias() = sys.B * u.row(b - 1).transpose();
+  else x.setZero();
   x.noalias() += sys.A * states.col(b - 1);
 }
 

@@ -14,6 +14,15 @@
 ///    backward prediction errors (J. P. Burg 1975; S. Kay, Modern Spectral
 ///    Estimation, 1988, sec. 7.3; always stable; several experiments pool the
 ///    numerator and denominator of each reflection coefficient).
+///  - AR "modified_yule_walker": the overdetermined modified Yule-Walker
+///    equations r(k) + sum_j a_j r(k - j) = 0 for k = na+1 .. na+M, solved by
+///    least squares (QR) (P. Stoica & R. Moses, Spectral Analysis of Signals,
+///    2005, sec. 3.7.2; Cadzow 1980). They use autocorrelation lags >= 1 only,
+///    which white measurement noise on y does not touch: the AR part of "AR
+///    process plus sensor noise" (an ARMA(na, na) process) comes out unbiased,
+///    where least squares, Burg and Yule-Walker spend their poles on the noise
+///    floor. Not guaranteed stable (checked by the caller's unstable-model
+///    warning); noise_variance is the variance of A(q) y.
 ///
 /// Data are mean-removed first (offsets in the result) unless told otherwise.
 /// Preconditions (std::invalid_argument): na >= 0, nb_i >= 0, nk_i >= 0, one nb
@@ -28,7 +37,7 @@
 
 namespace sysid {
 
-enum class ArMethod { least_squares, yule_walker, burg };
+enum class ArMethod { least_squares, yule_walker, burg, modified_yule_walker };
 
 struct ArxOptions {
   int na = 2;
@@ -41,6 +50,10 @@ struct ArOptions {
   int na = 2;
   ArMethod method = ArMethod::least_squares;
   bool remove_means = true;
+  /// modified_yule_walker: equations M (lags na+1 .. na+M); 0 = 4 na, "a few
+  /// times the order" (Stoica & Moses sec. 3.7.2: more equations average more
+  /// lags, but far lags of a biased autocorrelation estimate carry mostly noise).
+  int modified_yule_walker_equations = 0;
 };
 
 /// One model per output.
