@@ -3,6 +3,7 @@
 #include <sysid/pem/arx.hpp>
 #include <sysid/core/identification_warnings.hpp>
 #include <sysid/pem/lagged_regression.hpp>
+#include <sysid/signal/polynomial_filter.hpp>
 
 #include <cmath>
 #include <limits>
@@ -214,14 +215,14 @@ LinearPolynomialResult ar(IoData data, const ArOptions& options) {
         const Eigen::VectorXd acf = detail::pooled_autocorrelation(series, options.na + equations);
         if (!(acf(0) > 0)) throw DataError("ar: output '" + data.output_name(r) + "' is constant");
         model.A = detail::modified_yule_walker(acf, options.na, equations);
-        // Variance of A(q) y over every experiment (lags inside each series only).
+        // Variance of A(q) y over every experiment, from the samples where every lag
+        // lies inside the series (the first na of the filter output are its start-up).
         double sum = 0, count = 0;
-        for (const auto& x : series)
-          for (Eigen::Index t = options.na; t < x.size(); ++t) {
-            const double e = model.A.dot(x.segment(t - options.na, options.na + 1).reverse());
-            sum += e * e;
-            count += 1;
-          }
+        for (const auto& x : series) {
+          const Eigen::VectorXd e = filter_polynomial(model.A, Eigen::VectorXd::Ones(1), x).col(0);
+          sum += e.tail(x.size() - options.na).squaredNorm();
+          count += static_cast<double>(x.size() - options.na);
+        }
         model.noise_variance = sum / count;
       } else {
         std::tie(model.A, model.noise_variance) = detail::burg(series, options.na);
