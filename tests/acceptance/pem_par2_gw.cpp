@@ -4,13 +4,17 @@
 // truncation of the 20-40 Hz band keeps each within 1 % in frequency; AR(16)
 // does the same when estimated by the modified Yule-Walker method (least squares,
 // Burg and Yule-Walker resolve only the 25.9 Hz mode on this log: the sensor
-// noise makes it ARMA(4, 4), data/README.md).
+// noise makes it ARMA(4, 4), data/README.md). The spectra of ARMA(16,8) and of
+// the least-squares AR(16) agree with the log's Welch estimate.
 #include <sysid/core/modal_table.hpp>
 #include <sysid/io/csv.hpp>
 #include <sysid/pem/arx.hpp>
 #include <sysid/pem/polynomial_model.hpp>
 #include <sysid/pem/prediction_error.hpp>
 #include <sysid/reduce/modal_truncation.hpp>
+#include <sysid/spectral/confidence.hpp>
+#include <sysid/spectral/model_spectrum.hpp>
+#include <sysid/spectral/welch.hpp>
 
 #include <gtest/gtest.h>
 
@@ -76,4 +80,56 @@ TEST(Par2Disturbance, Arma16ReducedToOrder4KeepsBothResonancesWithinOnePercent) 
   const PemResult r = pem(disturbance_log(), o);
   ASSERT_EQ(r.status, PemResult::Status::converged) << r.termination;
   expect_both_resonances_within_one_percent(r.model, "ARMA(16, 8)");
+}
+
+namespace {
+
+/// The model's spectrum against the log's Welch estimate (nfft 4096, Hann, 50 %) in a band.
+SpectrumAgreement spectrum_against_welch(const PolynomialModel& model, const IoData& log, double f_lo, double f_hi,
+                                         const std::string& what) {
+  WelchOptions o;
+  o.nfft = 4096;
+  const PowerSpectrum ps = welch_psd(log.experiments.front().y, 1.0 / log.Ts, o);
+  const InnovationStateSpace ss = to_innovation_state_space(model);
+  const ModelSpectrum s =
+      model_output_spectrum(ss.model, ss.K, Eigen::MatrixXd::Constant(1, 1, model.noise_variance), ps.freq_hz);
+  const auto [lo, hi] = psd_confidence_factors(ps.dof, 0.95);
+  const SpectrumAgreement a = spectrum_agreement(ps.psd.col(0), s.output_psd.col(0), ps.freq_hz, f_lo, f_hi, lo, hi);
+  std::cout << what << " spectrum, " << f_lo << "-" << f_hi << " Hz: level " << a.median_db << " dB, shape " << a.mean_abs_db
+            << " dB, " << 100 * a.fraction_inside << " % of " << a.bins << " bins inside the 95 % band\n";
+  return a;
+}
+
+}  // namespace
+
+// "AR and ARMA spectra against the periodogram" (issue 4): ARMA(16,8) matches the
+// Welch estimate in level and shape over the whole band and around the two
+// resonances; the least-squares AR(16) over the whole band (around the resonances
+// it is 2-3 dB low: it spends poles on the sensor-noise floor). The modified
+// Yule-Walker AR(16), whose poles are right, is only printed: its spectrum
+// sigma^2/|A|^2 has no numerator for the noise-shaped log and sits ~27 dB above the
+// estimate at the resonances (data/README.md).
+TEST(Par2Disturbance, ArmaAndArSpectraAgreeWithTheWelchEstimate) {
+  const IoData log = disturbance_log();
+  PemOptions o;
+  o.na = 16;
+  o.nc = 8;
+  const PemResult arma = pem(log, o);
+  ASSERT_EQ(arma.status, PemResult::Status::converged) << arma.termination;
+  const SpectrumAgreement whole = spectrum_against_welch(arma.model, log, 1.0, 1000.0, "ARMA(16, 8)");
+  EXPECT_LT(std::abs(whole.median_db), 0.5);
+  EXPECT_LT(whole.mean_abs_db, 1.5);
+  EXPECT_GT(whole.fraction_inside, 0.85);
+  const SpectrumAgreement resonances = spectrum_against_welch(arma.model, log, 15.0, 45.0, "ARMA(16, 8)");
+  EXPECT_LT(std::abs(resonances.median_db), 0.5);
+  EXPECT_LT(resonances.mean_abs_db, 1.5);
+  EXPECT_GT(resonances.fraction_inside, 0.8);
+
+  const LinearPolynomialResult ls = ar(log, {.na = 16});
+  const SpectrumAgreement ar_whole = spectrum_against_welch(ls.models.front(), log, 1.0, 1000.0, "AR(16), least squares");
+  EXPECT_LT(std::abs(ar_whole.median_db), 0.5);
+  EXPECT_LT(ar_whole.mean_abs_db, 2.0);
+  spectrum_against_welch(ls.models.front(), log, 15.0, 45.0, "AR(16), least squares");
+  const LinearPolynomialResult myw = ar(log, {.na = 16, .method = ArMethod::modified_yule_walker});
+  spectrum_against_welch(myw.models.front(), log, 15.0, 45.0, "AR(16), modified Yule-Walker");
 }
