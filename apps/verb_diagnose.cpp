@@ -168,12 +168,12 @@ void run_diagnose(const DiagnoseArgs& a) {
     const Experiment& v = other.data.experiments.front();
     AugmentedModel plain = report.augmented;
     plain.blocks = nominal.blocks;
-    const Eigen::VectorXd before = fit_percent(v.y, simulate_augmented(plain, v.u));
-    const Eigen::VectorXd after = fit_percent(v.y, simulate_augmented(report.augmented, v.u));
+    const RecordingValidation fits = validate_on_recording(plain, report.augmented, v.u, v.y);
     j["held_out_segment"] = {{"validation", report.validation}, {"fit_before", report.fit_before}, {"fit_after", report.fit_after}};
-    j["validation"] = a.validate;
-    j["fit_before"] = before.mean();
-    j["fit_after"] = after.mean();
+    j["validation"] = a.validate + " (initial state estimated)";
+    j["validation_file"] = a.validate;
+    j["fit_before"] = fits.fit_before.mean();
+    j["fit_after"] = fits.fit_after.mean();
   }
 
   std::ostringstream s;

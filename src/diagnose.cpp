@@ -14,6 +14,7 @@
 
 #include "sysid/core/identification_warnings.hpp"
 #include "sysid/spectral/confidence.hpp"
+#include "sysid/validate/compare.hpp"
 #include "sysid/validate/fit.hpp"
 
 namespace sysid {
@@ -369,6 +370,36 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
   report.augmented.blocks = combine_blocks(base, accepted);
   report.augmented.substeps = simulator_for(accepted, base).substeps();
   return report;
+}
+
+namespace {
+
+/// The model simulated from the initial state that best explains the start of y
+/// (see RecordingValidation); returns the fit per output and sets model.x0.
+Eigen::VectorXd fit_from_estimated_state(AugmentedModel& model, const Eigen::Ref<const Eigen::MatrixXd>& u,
+                                         const Eigen::Ref<const Eigen::MatrixXd>& y) {
+  model.x0.resize(0);
+  const Eigen::MatrixXd residual = y - simulate_augmented(model, u);
+  model.x0 = estimate_initial_state(model.nominal, Eigen::MatrixXd::Zero(u.rows(), model.nominal.inputs()), residual);
+  return fit_percent(y, simulate_augmented(model, u));
+}
+
+}  // namespace
+
+RecordingValidation validate_on_recording(const AugmentedModel& nominal, const AugmentedModel& augmented,
+                                          const Eigen::Ref<const Eigen::MatrixXd>& u, const Eigen::Ref<const Eigen::MatrixXd>& y) {
+  if (nominal.nominal.A != augmented.nominal.A || nominal.nominal.C != augmented.nominal.C)
+    throw std::invalid_argument("validate_on_recording: the augmented model must extend the nominal one");
+  if (u.rows() != y.rows() || u.cols() != nominal.nominal.inputs() || y.cols() != nominal.nominal.outputs() || y.rows() < 1)
+    throw std::invalid_argument("validate_on_recording: need u N x " + std::to_string(nominal.nominal.inputs()) + " and y N x " +
+                                std::to_string(nominal.nominal.outputs()) + ", N >= 1");
+  RecordingValidation v;
+  AugmentedModel before = nominal, after = augmented;
+  v.fit_before = fit_from_estimated_state(before, u, y);
+  v.fit_after = fit_from_estimated_state(after, u, y);
+  v.x0_before = before.x0;
+  v.x0_after = after.x0;
+  return v;
 }
 
 }  // namespace sysid

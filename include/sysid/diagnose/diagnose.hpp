@@ -97,6 +97,25 @@ struct DiagnoseReport {
 DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Eigen::MatrixXd>& u,
                         const Eigen::Ref<const Eigen::MatrixXd>& y, const DiagnoseOptions& options = {});
 
+/// The nominal's and the augmented model's fit on an independent recording (the
+/// `--validate` file): per output, %, each model simulated from its own initial
+/// state. The recording starts wherever the machine was, so a zero initial state
+/// would charge both models a start-up transient that lasts the nominal's settling
+/// time (seconds for a lightly damped structure). x0 comes from linear least
+/// squares on the nominal's free response C A^t x0 fitted to the model's
+/// zero-state residual (estimate_initial_state, validate/compare.hpp): exact for
+/// the linear model and for blocks at the input or the sensor, a best linear
+/// estimate when a block feeds a force back inside the plant.
+struct RecordingValidation {
+  Eigen::VectorXd fit_before, fit_after;  ///< per output (%)
+  Eigen::VectorXd x0_before, x0_after;    ///< the initial states used
+};
+
+/// Preconditions (std::invalid_argument): `augmented` is `nominal` with blocks (same
+/// linear model); u N x m and y N x l match it, N >= 1.
+RecordingValidation validate_on_recording(const AugmentedModel& nominal, const AugmentedModel& augmented,
+                                          const Eigen::Ref<const Eigen::MatrixXd>& u, const Eigen::Ref<const Eigen::MatrixXd>& y);
+
 /// A sentence describing a fitted block, e.g. "The recordings contain a lightly
 /// damped mode at 31.6 Hz (damping 0.012) that the simulation lacks."
 std::string finding_summary(const PhysicsBlock& block, const std::vector<std::string>& input_names,
