@@ -156,11 +156,36 @@ std::optional<std::pair<double, double>> band_of(const PhysicsBlock& b, const Mi
   return std::make_pair(f - halfwidth, f + halfwidth);
 }
 
-std::vector<std::pair<double, double>> flagged_windows(const PhysicsBlock& b, const MismatchLocation& loc) {
+/// The flagged residual windows (location step, estimation part) that a finding
+/// explains: on any output, the window's residual mean square falls, from the
+/// simulation before the finding to the one after it, by at least half of its
+/// excess over the window floor (floor = the nominal residual's mean square there
+/// over its energy ratio, the location step's own figures). Windows another
+/// finding explains, or that no block reduces, are not listed.
+std::vector<std::pair<double, double>> explained_windows(const MismatchLocation& loc, const Eigen::MatrixXd& y,
+                                                         const Eigen::MatrixXd& nominal, const Eigen::MatrixXd& before,
+                                                         const Eigen::MatrixXd& after, Eigen::Index estimation, double Ts) {
+  // Mean squares of the residual centred over the estimation part, as locate_mismatch computes them.
+  const auto window_ms = [&](const Eigen::MatrixXd& sim, Eigen::Index i, Eigen::Index s0, Eigen::Index s1) {
+    const Eigen::VectorXd r = (y.col(i) - sim.col(i)).head(estimation);
+    const double mean = r.mean();
+    return (r.segment(s0, s1 - s0).array() - mean).square().mean();
+  };
   std::vector<std::pair<double, double>> out;
-  if (b.output >= static_cast<long>(loc.outputs.size())) return out;
-  for (const auto& w : loc.outputs[b.output].windows)
-    if (w.flagged) out.emplace_back(w.t0_s, w.t1_s);
+  for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(loc.outputs.size()) && i < y.cols(); ++i)
+    for (const auto& w : loc.outputs[static_cast<std::size_t>(i)].windows) {
+      if (!w.flagged || !(w.energy_ratio > 0.0)) continue;
+      const Eigen::Index s0 = std::clamp<Eigen::Index>(std::llround(w.t0_s / Ts), 0, estimation);
+      const Eigen::Index s1 = std::clamp<Eigen::Index>(std::llround(w.t1_s / Ts), s0, estimation);
+      if (s1 - s0 < 2) continue;
+      const double floor = window_ms(nominal, i, s0, s1) / w.energy_ratio;
+      const double ms_before = window_ms(before, i, s0, s1), ms_after = window_ms(after, i, s0, s1);
+      if (ms_before > floor && ms_before - ms_after >= 0.5 * (ms_before - floor)) {
+        const std::pair<double, double> t{w.t0_s, w.t1_s};
+        if (std::find(out.begin(), out.end(), t) == out.end()) out.push_back(t);
+      }
+    }
+  std::sort(out.begin(), out.end());
   return out;
 }
 
@@ -348,7 +373,7 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
     f.selection_gain = acceptance[k].selection_gain;
     f.t_statistic = acceptance[k].t_statistic;
     f.band_hz = band_of(c.block, report.location);
-    f.time_windows_s = flagged_windows(c.block, report.location);
+    f.time_windows_s = explained_windows(report.location, y, y_nominal, previous, next, seg.estimation, Ts);
     f.summary = finding_summary(c.block, model.input_names, model.output_names);
     report.findings.push_back(f);
     previous = next;

@@ -176,6 +176,42 @@ TEST(Diagnose, NamesTheChannelOfAMimoSensorEffect) {
   EXPECT_TRUE(none.findings.empty()) << none.findings[0].summary;
 }
 
+TEST(Diagnose, EachFindingListsTheWindowsItExplains) {
+  // Two effects at different times: the actuator saturates only during two loud
+  // stretches (2.0-3.5 s in the fitting part, 5.2-5.9 s in the selection part: an
+  // effect absent from the selection part cannot be accepted), and the sensor
+  // drifts (felt most at the ends of the 7 s estimation part, where the centred
+  // drift is largest).
+  Case c = make_case({}, 0.0, 11);
+  const double quiet_peak = c.u.cwiseAbs().maxCoeff();
+  const auto loud = [](double t0, double t1) { return (t0 >= 2.0 - 0.36 && t1 <= 3.5 + 0.36) || (t0 >= 5.2 - 0.36 && t1 <= 5.9 + 0.36); };
+  for (Eigen::Index k = 0; k < c.u.rows(); ++k)
+    if ((k >= 4000 && k < 7000) || (k >= 10400 && k < 11800)) c.u(k, 0) *= 3.0;
+  const sysid::AugmentedSimulator sim(c.nominal.nominal, 4);
+  const MatrixXd clean = sim.simulate({physics_block("saturation", {{"limit", 1.2 * quiet_peak}})}, c.u);
+  const double rms = std::sqrt(clean.squaredNorm() / static_cast<double>(clean.size()));
+  Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(clean.rows(), 0.0, static_cast<double>(clean.rows() - 1) * kTs);
+  c.y = clean + 0.03 * rms * sysid::test::white_noise(clean.rows(), 1, 111);
+  c.y.col(0) += 0.02 * rms * t;  // 0.2 rms over the 10 s
+  const sysid::DiagnoseReport r = sysid::diagnose(c.nominal, c.u, c.y);
+  const sysid::Finding* saturation = nullptr;
+  const sysid::Finding* drift = nullptr;
+  for (const auto& f : r.findings) {
+    if (f.candidate.block.kind == "saturation") saturation = &f;
+    if (f.candidate.block.kind == "offset_drift") drift = &f;
+  }
+  std::string all;
+  for (const auto& f : r.findings) all += f.summary + " | ";
+  ASSERT_NE(saturation, nullptr) << all;
+  ASSERT_FALSE(saturation->time_windows_s.empty());
+  // Windows are 0.35 s long: the loud stretches' windows only.
+  for (const auto& [t0, t1] : saturation->time_windows_s) EXPECT_TRUE(loud(t0, t1)) << t0 << " " << t1;
+  ASSERT_NE(drift, nullptr) << all;
+  // The drift does not claim the saturation's windows, though they are flagged
+  // windows of the same output (which every finding of that output used to list).
+  for (const auto& [t0, t1] : drift->time_windows_s) EXPECT_FALSE(loud(t0, t1)) << t0 << " " << t1;
+}
+
 TEST(ValidateOnRecording, EstimatesTheStateTheRecordingStartsIn) {
   // A recording cut from the middle of a run: the structure is moving at its start.
   const Case c = make_case({}, 0.0, 10);
