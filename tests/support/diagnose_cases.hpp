@@ -27,19 +27,20 @@ inline PhysicsBlock physics_block(const std::string& kind, std::map<std::string,
   return b;
 }
 
-/// Two-mode structure (25 Hz, damping 0.02; 34 Hz, 0.015) sampled with a ZOH at
-/// Ts, force in, collocated position out, channels named u and y.
-inline StateSpace two_mode_structure(double Ts) {
+/// Two-mode structure (f1 = 25 Hz, damping 0.02; f2 = 34 Hz, 0.015 by default)
+/// sampled with a ZOH at Ts, force in (the first mode's input gain b1), collocated
+/// position out, channels named u and y.
+inline StateSpace two_mode_structure(double Ts, double f1_hz = 25.0, double f2_hz = 34.0, double b1 = 1.0) {
   constexpr double two_pi = 2.0 * std::numbers::pi;
   Eigen::MatrixXd A = Eigen::MatrixXd::Zero(4, 4), B(4, 1), C(1, 4);
-  const double w1 = two_pi * 25, w2 = two_pi * 34;
+  const double w1 = two_pi * f1_hz, w2 = two_pi * f2_hz;
   A(0, 1) = 1;
   A(1, 0) = -w1 * w1;
   A(1, 1) = -2 * 0.02 * w1;
   A(2, 3) = 1;
   A(3, 2) = -w2 * w2;
   A(3, 3) = -2 * 0.015 * w2;
-  B << 0, 1, 0, 1;
+  B << 0, b1, 0, 1;
   C << 1, 0, 0.5, 0;
   StateSpace s = c2d_zoh(StateSpace(A, B, C, Eigen::MatrixXd::Zero(1, 1), 0.0), Ts);
   s.input_names = {"u"};

@@ -102,21 +102,7 @@ TEST(CandidateFit, RecoversADeadZoneFromAPoorStart) {
 /// simulation gives when it ignores the coupling between its axes.
 Case make_mimo_case(const std::vector<PhysicsBlock>& truth, double noise_fraction, std::uint64_t seed) {
   const StateSpace a = structure();
-  StateSpace b = structure();
-  {
-    // Same shape, other frequencies: scale the continuous model's frequencies.
-    constexpr double w1 = kTwoPi * 18, w2 = kTwoPi * 47;
-    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(4, 4), B(4, 1), C(1, 4);
-    A(0, 1) = 1;
-    A(1, 0) = -w1 * w1;
-    A(1, 1) = -2 * 0.02 * w1;
-    A(2, 3) = 1;
-    A(3, 2) = -w2 * w2;
-    A(3, 3) = -2 * 0.015 * w2;
-    B << 0, 1.5, 0, 1;
-    C << 1, 0, 0.5, 0;
-    b = sysid::c2d_zoh(StateSpace(A, B, C, MatrixXd::Zero(1, 1), 0.0), kTs);
-  }
+  const StateSpace b = sysid::test::two_mode_structure(kTs, 18.0, 47.0, 1.5);
   MatrixXd A = MatrixXd::Zero(8, 8), B = MatrixXd::Zero(8, 2), C = MatrixXd::Zero(2, 8);
   A.topLeftCorner(4, 4) = a.A;
   A.bottomRightCorner(4, 4) = b.A;
