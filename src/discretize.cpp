@@ -29,6 +29,29 @@ StateSpace c2d_zoh(const StateSpace& continuous, double Ts) {
   return d;
 }
 
+StateSpace c2d_foh(const StateSpace& continuous, double Ts) {
+  continuous.validate();
+  if (continuous.Ts != 0.0) throw std::invalid_argument("c2d_foh: need a continuous model (Ts == 0)");
+  if (!(Ts > 0.0) || !std::isfinite(Ts)) throw std::invalid_argument("c2d_foh: need sample time Ts > 0");
+  const Eigen::Index n = continuous.order(), m = continuous.inputs();
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n + 2 * m, n + 2 * m);
+  M.topLeftCorner(n, n) = continuous.A * Ts;
+  M.block(0, n, n, m) = continuous.B * Ts;
+  M.block(n, n + m, m, m) = Eigen::MatrixXd::Identity(m, m);
+  const Eigen::MatrixXd E = M.exp();
+  if (!E.allFinite()) throw NumericalError("c2d_foh: matrix exponential overflowed (A Ts too large)");
+  const Eigen::MatrixXd Phi = E.topLeftCorner(n, n), G1 = E.block(0, n, n, m), G2 = E.block(0, n + m, n, m);
+  const Eigen::MatrixXd Bd = G1 + Phi * G2 - G2;
+  StateSpace d(Phi, Bd, continuous.C, continuous.D + continuous.C * G2, Ts);
+  d.input_names = continuous.input_names;
+  d.output_names = continuous.output_names;
+  return d;
+}
+
+StateSpace c2d(const StateSpace& continuous, double Ts, Hold hold) {
+  return hold == Hold::foh ? c2d_foh(continuous, Ts) : c2d_zoh(continuous, Ts);
+}
+
 StateSpace d2c_zoh(const StateSpace& discrete) {
   discrete.validate();
   if (!discrete.is_discrete()) throw std::invalid_argument("d2c_zoh: need a discrete model (Ts > 0)");

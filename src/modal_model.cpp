@@ -83,7 +83,7 @@ ModalModelResult modal_model(const SecondOrderModel& model, const ModalAnalysisR
   StateSpace continuous(a, b, c, d, 0.0);
   for (const auto& in : model.inputs) continuous.input_names.push_back(in.name);
   for (const auto& out : model.outputs) continuous.output_names.push_back(out.name);
-  result.model = options.Ts > 0.0 ? c2d_zoh(continuous, options.Ts) : continuous;
+  result.model = options.Ts > 0.0 ? c2d(continuous, options.Ts, options.hold) : continuous;
   if (options.Ts > 0.0) {
     result.model.input_names = continuous.input_names;
     result.model.output_names = continuous.output_names;

@@ -1,4 +1,4 @@
-// Tests for sysid::c2d_zoh / d2c_zoh (include/sysid/core/discretize.hpp).
+// Tests for sysid::c2d_zoh / d2c_zoh / c2d_foh (include/sysid/core/discretize.hpp).
 #include <sysid/core/discretize.hpp>
 #include <sysid/core/errors.hpp>
 #include <sysid/core/frequency_response.hpp>
@@ -116,6 +116,70 @@ TEST(CoreDiscretize, StepResponseSamplesContinuousStepExactly) {
   // expm to ~eps relative, then 2000 steps of a recursion with |z| ~ 0.996:
   // accumulated rounding ~ 1e-13.
   EXPECT_LT(worst, 1e-11);
+}
+
+TEST(CoreDiscretize, FirstOrderHoldIsExactForPiecewiseLinearInputs) {
+  // A two-input, two-output oscillator driven by inputs that are straight lines
+  // between their samples: the FOH model's outputs equal the continuous ones at
+  // the sample instants, integrated here independently by RK4 with 100 steps per
+  // sample (local error ~ (w h)^5 ~ 1e-16 at w h = 7.5e-4).
+  const double wn = 2.0 * kPi * 12.0, zeta = 0.05, Ts = 1e-3;
+  const MatrixXd A = (MatrixXd(2, 2) << 0, 1, -wn * wn, -2 * zeta * wn).finished();
+  const MatrixXd B = (MatrixXd(2, 2) << 0, 1, wn * wn, -3).finished();
+  const MatrixXd C = (MatrixXd(2, 2) << 1, 0, 0.2, 0.01).finished();
+  const MatrixXd D = (MatrixXd(2, 2) << 0, 0, 0.5, 0).finished();
+  const sysid::StateSpace sc(A, B, C, D, 0.0);
+  const sysid::StateSpace sd = sysid::c2d_foh(sc, Ts);
+  std::mt19937_64 rng(4);
+  const Eigen::Index N = 300;
+  MatrixXd u = randn(rng, N, 2);
+  // The FOH state is xi = x - G2 u: a simulation from xi(0) = 0 starts at x(0) =
+  // G2 u(0), which is the continuous x(0) = 0 when u(0) = 0.
+  u.row(0).setZero();
+  const MatrixXd y = sysid::simulate(sd, u);
+  const int sub = 100;
+  const double h = Ts / sub;
+  Eigen::Vector2d x = Eigen::Vector2d::Zero();
+  double worst = 0.0, scale = 0.0;
+  for (Eigen::Index k = 0; k < N; ++k) {
+    const Eigen::Vector2d exact = C * x + D * u.row(k).transpose();
+    worst = std::max(worst, (y.row(k).transpose() - exact).cwiseAbs().maxCoeff());
+    scale = std::max(scale, exact.cwiseAbs().maxCoeff());
+    if (k + 1 == N) break;
+    const Eigen::Vector2d u0 = u.row(k).transpose(), slope = (u.row(k + 1) - u.row(k)).transpose() / Ts;
+    const auto f = [&](const Eigen::Vector2d& xs, double tau) -> Eigen::Vector2d { return A * xs + B * (u0 + slope * tau); };
+    for (int j = 0; j < sub; ++j) {
+      const double t = j * h;
+      const Eigen::Vector2d k1 = f(x, t), k2 = f(x + 0.5 * h * k1, t + 0.5 * h), k3 = f(x + 0.5 * h * k2, t + 0.5 * h),
+                            k4 = f(x + h * k3, t + h);
+      x += h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4);
+    }
+  }
+  EXPECT_LT(worst, 1e-10 * scale) << worst << " of " << scale;
+  // ZOH, on the same samples, is visibly off (the hold lags by half a sample).
+  const MatrixXd y_zoh = sysid::simulate(sysid::c2d_zoh(sc, Ts), u);
+  EXPECT_GT((y_zoh - y).cwiseAbs().maxCoeff(), 1e-3 * scale);
+}
+
+TEST(CoreDiscretize, FirstOrderHoldKeepsPolesAndDcGain) {
+  std::mt19937_64 rng(12);
+  const double Ts = 1e-3;
+  for (Eigen::Index n = 1; n <= 6; ++n) {
+    const sysid::StateSpace sc = random_continuous(rng, n, 2, 3, Ts);
+    const sysid::StateSpace foh = sysid::c2d_foh(sc, Ts), zoh = sysid::c2d_zoh(sc, Ts);
+    EXPECT_NEAR((foh.A - zoh.A).norm(), 0.0, 1e-14 * zoh.A.norm()) << n;
+    // G(z = 1) of the hold = G(s = 0): a constant input is held exactly by both.
+    EXPECT_LT(max_rel_frf_diff(foh, sc, VectorXd::Zero(1)), 1e-10) << n;
+    EXPECT_EQ(foh.input_names, sc.input_names);
+  }
+  // An integrator: FOH of 1/s is the trapezoidal rule, (Ts/2) (z + 1) / (z - 1).
+  const sysid::StateSpace integrator(MatrixXd::Zero(1, 1), MatrixXd::Ones(1, 1), MatrixXd::Ones(1, 1), MatrixXd::Zero(1, 1), 0.0);
+  const sysid::StateSpace trap = sysid::c2d_foh(integrator, 0.1);
+  EXPECT_NEAR(trap.D(0, 0), 0.05, 1e-15);                        // h0 = Ts/2
+  EXPECT_NEAR(trap.C(0, 0) * trap.B(0, 0), 0.1, 1e-15);          // h1 = Ts
+  EXPECT_NEAR(trap.C(0, 0) * trap.A(0, 0) * trap.B(0, 0), 0.1, 1e-15);  // h2 = Ts
+  EXPECT_THROW(sysid::c2d_foh(trap, 0.1), std::invalid_argument);
+  EXPECT_THROW(sysid::c2d_foh(integrator, 0.0), std::invalid_argument);
 }
 
 TEST(CoreDiscretize, RoundTripRecoversContinuousFrequencyResponse) {

@@ -1,7 +1,7 @@
 #pragma once
 /// @file
 /// Purpose: exact zero-order-hold conversion between continuous- and discrete-time
-/// state-space models.
+/// state-space models, and the first-order-hold (triangle-hold) discretisation.
 ///
 /// Method: with the input held constant over each sample interval,
 ///
@@ -13,6 +13,20 @@
 /// Eigen's MatrixFunctions module evaluates expm by scaling and squaring with Pade
 /// approximants (Higham 2005) and logm by Schur-Parlett with inverse scaling and
 /// squaring atoms (Higham 2008).
+///
+/// First-order hold (Franklin, Powell & Workman, Digital Control of Dynamic Systems,
+/// 3rd ed., sec. 6.3.2): the input is the straight line through its samples, the
+/// right model for smooth signals that were merely sampled (a measured force, an
+/// oversampled and decimated simulation), where ZOH lags by half a sample. With
+///
+///   expm([A Ts, B Ts, 0; 0, 0, I; 0, 0, 0]) = [Phi, G1, G2; 0, I, I; 0, 0, I],
+///
+/// the model in the state xi = x - G2 u is
+///
+///   xi+ = Phi xi + (G1 + (Phi - I) G2) u,   y = C xi + (D + C G2) u
+///
+/// (the same as MATLAB's c2d 'foh' and SciPy's cont2discrete 'foh'). A strictly
+/// proper plant gets a direct term: the hold looks half a sample ahead.
 ///
 /// Numerical aspects: O((n+m)^3). d2c_zoh inverts c2d_zoh only for continuous
 /// poles with |Im s| < pi / Ts (no aliasing); a discrete pole on the closed
@@ -31,6 +45,18 @@ namespace sysid {
 /// Preconditions: continuous.Ts == 0 and Ts > 0 finite (std::invalid_argument).
 /// Numerical aspects: one (n+m)-square matrix exponential. Names are kept.
 StateSpace c2d_zoh(const StateSpace& continuous, double Ts);
+
+/// Purpose: first-order-hold (triangle-hold) discretisation with sample time Ts;
+/// see the file comment. The state is xi = x - G2 u, not x.
+/// Preconditions: continuous.Ts == 0 and Ts > 0 finite (std::invalid_argument).
+/// Numerical aspects: one (n+2m)-square matrix exponential. Names are kept.
+StateSpace c2d_foh(const StateSpace& continuous, double Ts);
+
+/// The holds a continuous model can be sampled with.
+enum class Hold { zoh, foh };
+
+/// c2d_zoh or c2d_foh.
+StateSpace c2d(const StateSpace& continuous, double Ts, Hold hold);
 
 /// Purpose: the continuous model whose exact ZOH discretisation is `discrete`.
 /// Preconditions: discrete.Ts > 0 (std::invalid_argument).

@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "sysid/core/discretize.hpp"
 #include "sysid/core/state_space.hpp"
 #include "sysid/fem/modal_analysis.hpp"
 #include "sysid/fem/second_order_model.hpp"
@@ -32,7 +33,10 @@ namespace sysid::fem {
 
 struct ModalModelOptions {
   bool static_correction = false;  ///< add the residual flexibility of the truncated modes (file comment)
-  double Ts = 0.0;                 ///< 0: continuous model; > 0: zero-order-hold sampled at Ts seconds
+  double Ts = 0.0;                 ///< 0: continuous model; > 0: sampled at Ts seconds with `hold`
+  /// ZOH for inputs held by a DAC between samples; FOH (core/discretize.hpp) for
+  /// smooth signals that were only sampled, where ZOH lags by half a sample.
+  Hold hold = Hold::zoh;
 };
 
 struct ModalModelResult {
