@@ -74,6 +74,21 @@ void lms_markov(const std::string& log, const std::string& input, int taps, cons
           "0.5,0.3,0.2", "--mu", "0.5", "--out", out});
 }
 
+/// ERA of one experiment at `order`: of its estimated Markov parameters (the model
+/// `name`, appended to `parts`) and of the exact ones of input j of `truth` (the
+/// floor, appended to `floor_parts`).
+void realise_with_floor(const TempDir& dir, const std::string& estimate, const StateSpace& truth, Eigen::Index j, int count,
+                        int order, const std::string& name, std::vector<std::string>& parts,
+                        std::vector<std::string>& floor_parts) {
+  const std::string o = std::to_string(order), exact = dir / ("exact_" + name + ".json");
+  run_ok({"era", estimate, "--order", o, "--row-blocks", kEraRowBlocks, "--out", dir / (name + ".json")});
+  write_exact_markov(truth, j, count, exact);
+  run_ok({"era", exact, "--order", o, "--row-blocks", kEraRowBlocks, "--out", dir / ("floor_" + name + ".json")});
+  parts.push_back(dir / (name + ".json"));
+  floor_parts.push_back(dir / ("floor_" + name + ".json"));
+}
+
+
 /// Sums for a relative in-band error sqrt(sum |G - H|^2 / sum |H|^2).
 struct BandError {
   double num = 0.0, den = 0.0;
@@ -145,15 +160,11 @@ TEST(IsolatorReproduction, ChirpExperimentsLmsEraAssembleReduce) {
   for (int j = 1; j <= 8; ++j) {
     const std::string n = std::to_string(j), log = kData + "/exp" + n + ".csv";
     lms_markov(log, "u" + n, kTaps, dir / ("fir" + n + ".json"));
-    run_ok({"era", dir / ("fir" + n + ".json"), "--order", "14", "--row-blocks", kEraRowBlocks, "--out", dir / ("m" + n + ".json")});
-    write_exact_markov(truth, j - 1, kTaps - 1, dir / ("exact" + n + ".json"));
-    run_ok({"era", dir / ("exact" + n + ".json"), "--order", "14", "--row-blocks", kEraRowBlocks, "--out", dir / ("floor" + n + ".json")});
+    realise_with_floor(dir, dir / ("fir" + n + ".json"), truth, j - 1, kTaps - 1, 14, "m" + n, parts, floor_parts);
     // The chirp repeats every 4096 samples: a rectangular window of one period
     // has no leakage once the start-up transient has decayed.
     run_ok({"frf", log, "--inputs", "u" + n, "--outputs", kOutputs, "--nfft", "4096", "--window", "rectangular", "--overlap", "0",
             "--out", dir / ("frf" + n + ".csv")});
-    parts.push_back(dir / ("m" + n + ".json"));
-    floor_parts.push_back(dir / ("floor" + n + ".json"));
   }
   if (HasFatalFailure()) return;
   const std::string assembled = dir / "avi112.json", floor_assembled = dir / "floor112.json";
@@ -222,11 +233,7 @@ TEST(IsolatorReproduction, HammerTapsOkidEraAssembleReduce) {
     const std::string n = std::to_string(k);
     run_ok({"okid", kData + "/tap" + n + ".csv", "--inputs", "f" + n, "--outputs", kOutputs, "--observer-order", "20", "--count", "2048",
             "--out", dir / ("okid" + n + ".json")});
-    run_ok({"era", dir / ("okid" + n + ".json"), "--order", "8", "--row-blocks", kEraRowBlocks, "--out", dir / ("t" + n + ".json")});
-    write_exact_markov(truth, k - 1, 2048, dir / ("exact" + n + ".json"));
-    run_ok({"era", dir / ("exact" + n + ".json"), "--order", "8", "--row-blocks", kEraRowBlocks, "--out", dir / ("floor" + n + ".json")});
-    parts.push_back(dir / ("t" + n + ".json"));
-    floor_parts.push_back(dir / ("floor" + n + ".json"));
+    realise_with_floor(dir, dir / ("okid" + n + ".json"), truth, k - 1, 2048, 8, "t" + n, parts, floor_parts);
   }
   if (HasFatalFailure()) return;
   const std::string assembled = dir / "taps24.json", floor_assembled = dir / "floor24.json";
