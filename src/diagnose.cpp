@@ -413,7 +413,11 @@ Eigen::VectorXd fit_from_estimated_state(AugmentedModel& model, const Eigen::Ref
 
 RecordingValidation validate_on_recording(const AugmentedModel& nominal, const AugmentedModel& augmented,
                                           const Eigen::Ref<const Eigen::MatrixXd>& u, const Eigen::Ref<const Eigen::MatrixXd>& y) {
-  if (nominal.nominal.A != augmented.nominal.A || nominal.nominal.C != augmented.nominal.C)
+  const auto same = [](const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+    return a.rows() == b.rows() && a.cols() == b.cols() && a == b;
+  };
+  if (!same(nominal.nominal.A, augmented.nominal.A) || !same(nominal.nominal.B, augmented.nominal.B) ||
+      !same(nominal.nominal.C, augmented.nominal.C))
     throw std::invalid_argument("validate_on_recording: the augmented model must extend the nominal one");
   if (u.rows() != y.rows() || u.cols() != nominal.nominal.inputs() || y.cols() != nominal.nominal.outputs() || y.rows() < 1)
     throw std::invalid_argument("validate_on_recording: need u N x " + std::to_string(nominal.nominal.inputs()) + " and y N x " +

@@ -209,6 +209,12 @@ TEST(ValidateOnRecording, EstimatesTheStateTheRecordingStartsIn) {
   const double zero_state = sysid::fit_percent(y, sysid::simulate_augmented(c.nominal, u))(0);
   EXPECT_LT(zero_state, 99.0);
   EXPECT_THROW(sysid::validate_on_recording(c.nominal, c.nominal, u, y.topRows(10)), std::invalid_argument);
+  // The augmented model must extend this nominal (same linear core).
+  sysid::AugmentedModel other = c.nominal;
+  other.nominal = sysid::test::two_mode_structure(kTs, 18.0, 47.0);
+  EXPECT_THROW(sysid::validate_on_recording(c.nominal, other, u, y), std::invalid_argument);
+  other.nominal = make_mimo_case({}, 0.0, 1).nominal.nominal;  // another order
+  EXPECT_THROW(sysid::validate_on_recording(c.nominal, other, u, y), std::invalid_argument);
 }
 
 TEST(Diagnose, RejectsTooShortRecords) {
