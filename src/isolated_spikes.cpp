@@ -58,31 +58,47 @@ std::vector<Eigen::Index> isolated_spikes(const Eigen::VectorXd& x, double thres
   return spikes;
 }
 
+namespace {
+
+/// Samples near a sudden input change (a step or an impulse, by the spike
+/// criterion on the input's differences, either neighbour or both), over the
+/// concatenated experiments: a spike there may be the plant's answer.
+std::vector<bool> input_guard(const IoData& data, const IsolatedSpikeOptions& o) {
+  std::vector<bool> guarded(static_cast<std::size_t>(data.total_samples()), false);
+  Eigen::Index offset = 0;
+  for (const auto& e : data.experiments) {
+    const Eigen::Index N = e.samples();
+    for (Eigen::Index j = 0; j < e.u.cols() && N >= 3; ++j) {
+      const double limit = o.threshold * robust_difference_scale(e.u.col(j));
+      for (Eigen::Index t = 1; t < N; ++t)
+        if (std::abs(e.u(t, j) - e.u(t - 1, j)) > limit)
+          for (Eigen::Index k = std::max<Eigen::Index>(0, t - 1 - o.input_guard);
+               k <= std::min<Eigen::Index>(N - 1, t + o.input_guard); ++k)
+            guarded[static_cast<std::size_t>(offset + k)] = true;
+    }
+    offset += N;
+  }
+  return guarded;
+}
+
+}  // namespace
+
 std::vector<std::string> isolated_spike_warnings(const IoData& data, const std::string& who,
                                                  const IsolatedSpikeOptions& o) {
   std::vector<std::string> out;
+  // The guard depends on the inputs only: computed once for every output (its
+  // robust scales are medians over the whole record).
+  const std::vector<bool> guarded = input_guard(data, o);
   for (Eigen::Index i = 0; i < data.outputs(); ++i) {
     std::vector<std::string> where;
     Eigen::Index count = 0;
     Eigen::Index offset = 0;  // sample index over the concatenated experiments
     for (const auto& e : data.experiments) {
-      const Eigen::Index N = e.samples();
-      // Samples near a sudden input change: a step or impulse, by the same criterion
-      // on the input's differences (either one neighbour or both).
-      std::vector<bool> guarded(static_cast<std::size_t>(N), false);
-      for (Eigen::Index j = 0; j < e.u.cols() && N >= 3; ++j) {
-        const double limit = o.threshold * robust_difference_scale(e.u.col(j));
-        for (Eigen::Index t = 1; t < N; ++t)
-          if (std::abs(e.u(t, j) - e.u(t - 1, j)) > limit)
-            for (Eigen::Index k = std::max<Eigen::Index>(0, t - 1 - o.input_guard);
-                 k <= std::min<Eigen::Index>(N - 1, t + o.input_guard); ++k)
-              guarded[static_cast<std::size_t>(k)] = true;
-      }
       for (Eigen::Index t : isolated_spikes(e.y.col(i), o.threshold)) {
-        if (guarded[static_cast<std::size_t>(t)]) continue;
+        if (guarded[static_cast<std::size_t>(offset + t)]) continue;
         if (++count <= 5) where.push_back(std::to_string(offset + t));
       }
-      offset += N;
+      offset += e.samples();
     }
     if (count == 0) continue;
     std::string list;
