@@ -26,7 +26,7 @@ is imported) so both sides run on one core, as sysid does; --blas-threads change
 python-control and slycot are not dependencies of sysid; `pip install slycot
 control` for this script only.
 
-Usage: balred_control.py --bench PATH/sysid_bench_balred [--order 30] [--repeats 9] [--dense 0|1]
+Usage: balred_control.py --bench PATH/sysid_bench_balred [--order 30] [--repeats 21] [--dense 0|1]
 """
 import argparse
 import json
@@ -42,7 +42,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--bench", required=True, help="path of sysid_bench_balred")
     ap.add_argument("--order", type=int, default=30)
-    ap.add_argument("--repeats", type=int, default=9)
+    ap.add_argument("--repeats", type=int, default=21)
     ap.add_argument("--dense", type=int, default=0)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--blas-threads", type=int, default=1)
