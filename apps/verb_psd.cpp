@@ -84,6 +84,7 @@ ModelCurves model_curves(const ModelFile& file, const std::string& path, const s
   }
   mc.spectrum = discrete_noise_model ? model_output_spectrum(model, file.K, file.noise_covariance, ps.freq_hz, input_csd)
                                      : model_output_spectrum(model, Eigen::MatrixXd(), Eigen::MatrixXd(), ps.freq_hz, input_csd);
+  for (const auto& w : mc.spectrum.warnings) warn(verb, path + ": " + w);
   return mc;
 }
 

@@ -1,4 +1,5 @@
 #include <sysid/core/frequency_response.hpp>
+#include <sysid/core/poles_zeros.hpp>
 #include <sysid/spectral/model_spectrum.hpp>
 
 #include <algorithm>
@@ -52,6 +53,12 @@ ModelSpectrum model_output_spectrum(const StateSpace& model, const Eigen::Matrix
 
   ModelSpectrum out;
   out.freq_hz = freq_hz;
+  if (n > 0) {
+    const double radius = poles(model).cwiseAbs().maxCoeff();
+    if (!(radius < 1.0))
+      out.warnings.push_back("the model is unstable (spectral radius " + std::to_string(radius) +
+                             "): it has no stationary output, so its curve is not a spectrum");
+  }
   out.output_psd = Eigen::MatrixXd::Zero(nf, l);
   out.disturbance_psd = Eigen::MatrixXd::Zero(nf, l);
   for (Eigen::Index k = 0; k < nf; ++k) {

@@ -61,6 +61,11 @@ TEST(ModelSpectrum, Ar1MatchesTheClosedForm) {
     EXPECT_NEAR(s.output_psd(k, 0), expected, 1e-12 * expected) << f(k);
     EXPECT_EQ(s.output_psd(k, 0), s.disturbance_psd(k, 0));
   }
+  EXPECT_TRUE(s.warnings.empty());
+  // An unstable AR(1) has no stationary output: said so.
+  const ModelSpectrum u = model_output_spectrum(ar1(1.1, ts), Eigen::MatrixXd::Constant(1, 1, 1.1), Eigen::MatrixXd::Constant(1, 1, lambda), f);
+  ASSERT_EQ(u.warnings.size(), 1u);
+  EXPECT_NE(u.warnings[0].find("unstable"), std::string::npos) << u.warnings[0];
 }
 
 TEST(ModelSpectrum, IntegratesToTheLyapunovVariance) {

@@ -35,6 +35,7 @@
 #include <sysid/core/state_space.hpp>
 
 #include <Eigen/Dense>
+#include <string>
 #include <vector>
 
 namespace sysid {
@@ -43,6 +44,9 @@ struct ModelSpectrum {
   Eigen::VectorXd freq_hz;
   Eigen::MatrixXd output_psd;       ///< frequencies x outputs: the input part plus the disturbance part
   Eigen::MatrixXd disturbance_psd;  ///< frequencies x outputs: c(f) Ts H Lambda H^H alone
+  /// e.g. an unstable model (a pole on or outside the unit circle) has no stationary
+  /// output: its curve is still |G|^2 Phi_u + |H|^2 Lambda, but not a spectrum.
+  std::vector<std::string> warnings;
 };
 
 /// Purpose: the model's one-sided output PSD (units^2/Hz), see the file comment.
