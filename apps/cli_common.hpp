@@ -60,10 +60,15 @@ LoadedLog load_log(const std::string& path, const LogOptions& options);
 ModelFile load_model(const std::string& path, bool allow_augmented = false);
 
 /// The model's state-space part ready to run on data sampled every `ts` seconds:
-/// a continuous model (Ts = 0) is discretised with a zero-order hold (with a note
-/// on stderr); a discrete model whose Ts differs from the log's by more than 1e-6
-/// relative is a DataError (a model runs only at its own rate).
+/// a continuous model (Ts = 0) is discretised with the hold of --hold (zero-order
+/// by default; with a note on stderr); a discrete model whose Ts differs from the
+/// log's by more than 1e-6 relative is a DataError (a model runs only at its own rate).
 StateSpace model_for_sample_time(const ModelFile& file, double ts, const std::string& model_path, const std::string& verb);
+
+/// Adds --hold zoh|foh (how a continuous model is sampled, read by
+/// model_for_sample_time) to a verb that runs a model on a log. Like --force, a
+/// process-wide setting: one verb runs per process.
+void add_hold_option(CLI::App& cmd);
 
 /// The model's channel names: the given list, else the model's names (u1.., y1.. when absent).
 std::vector<std::string> model_input_names(const ModelFile& file);

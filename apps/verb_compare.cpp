@@ -251,6 +251,7 @@ Verb register_compare(CLI::App& app) {
       "  sysid compare model.json fresh.csv --predict 10\n"
       "  sysid compare model.json fresh.csv --band 0:100 --nfft 4096 --plot compare.svg\n"
       "  sysid compare --fem beam.json measured.csv --band 5:400 --nfft 4096");
+  add_hold_option(*cmd);
   return {cmd, [args] { run_compare(*args); }};
 }
 

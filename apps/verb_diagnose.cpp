@@ -240,6 +240,7 @@ Verb register_diagnose(CLI::App& app) {
       "held out from every fit and gives fit_before / fit_after.\n"
       "Example:\n"
       "  sysid diagnose --model nominal.json log.csv --inputs u --outputs y --json report.json --out augmented.json");
+  add_hold_option(*cmd);
   return {cmd, [args] { run_diagnose(*args); }};
 }
 

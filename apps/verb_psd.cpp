@@ -253,6 +253,7 @@ Verb register_psd(CLI::App& app) {
       "Examples:\n"
       "  sysid psd par2_gu.csv --columns u,y --nfft 4096 --out psd.csv\n"
       "  sysid psd par2_gw.csv --columns y --nfft 4096 --model ar16.json --model arma16.json --plot gw.svg");
+  add_hold_option(*cmd);
   return {cmd, [args] { run_psd(*args); }};
 }
 

@@ -199,6 +199,7 @@ Verb register_resid(CLI::App& app) {
       "Example:\n"
       "  sysid resid model.json log.csv\n"
       "  sysid resid model.json fresh.csv --inputs u --outputs y --max-lag 40 --out resid.csv");
+  add_hold_option(*cmd);
   return {cmd, [args] { run_resid(*args); }};
 }
 

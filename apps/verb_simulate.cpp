@@ -91,6 +91,7 @@ Verb register_simulate(CLI::App& app) {
       "Example:\n"
       "  sysid simulate model.json log.csv --inputs u --out sim.csv\n"
       "  sysid simulate model.json log.csv --x0 estimate --outputs y --out sim.csv");
+  add_hold_option(*cmd);
   return {cmd, [args] { run_simulate(*args); }};
 }
 

@@ -135,6 +135,21 @@ TEST(FemApp, FirstOrderHoldNominalDiagnosesTheSmoothlySampledLog) {
   EXPECT_EQ(finding["kind"], "mode_shift") << r.out;
   EXPECT_NEAR(finding["params"]["freq_hz"].get<double>(), truth["shifted_mode_hz"].get<double>(), 0.3) << r.out;
   EXPECT_GT(report["fit_after"].get<double>(), report["fit_before"].get<double>() + 3.0) << r.out;
+  // A continuous model run on the log takes the same hold from --hold (simulate,
+  // compare, resid, psd, diagnose): the same fits as the model sampled by reduce.
+  const std::string continuous = tmp / "beam8_c.json";
+  r = run_cli({"reduce", "--fem", kFem + "beam.json", "--modes", "8", "--out", continuous});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  r = run_cli({"compare", continuous, kFem + "measured.csv", "--x0", "zero", "--hold", "foh"});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_TRUE(r.err.find("first-order hold") != std::string::npos) << r.err;
+  EXPECT_NEAR(fit_after(r.out, "fit [%]", "v_tip"), fit_of(foh, "v_tip"), 0.01) << r.out;
+  r = run_cli({"compare", continuous, kFem + "measured.csv", "--x0", "zero"});
+  EXPECT_NEAR(fit_after(r.out, "fit [%]", "v_tip"), fit_of(zoh, "v_tip"), 0.01) << r.out;
+  r = run_cli({"compare", foh, kFem + "measured.csv", "--x0", "zero", "--hold", "foh"});
+  EXPECT_TRUE(r.err.find("--hold applies only to continuous-time models") != std::string::npos) << r.err;
+  r = run_cli({"compare", continuous, kFem + "measured.csv", "--hold", "linear"});
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
   // --hold without --ts, or without --fem, is a usage error.
   r = run_cli({"reduce", "--fem", kFem + "beam.json", "--modes", "8", "--hold", "foh", "--out", tmp / "x.json"});
   EXPECT_EQ(r.exit_code, 1) << describe(r);
