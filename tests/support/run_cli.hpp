@@ -94,6 +94,13 @@ inline void write_text_file(const std::string& path, const std::string& text) {
 /// Runs `sysid args...` through /bin/sh: stdout is read through popen, stderr is
 /// redirected to a temporary file (unique per call, removed afterwards).
 inline CliResult run_cli(const std::vector<std::string>& args) {
+#ifndef SYSID_BINARY
+  // Built without the command-line program (SYSID_BUILD_APPS=OFF): unit tests that
+  // include this header for its file helpers still compile; only app tests, which
+  // are not registered then, run the binary.
+  (void)args;
+  throw std::runtime_error("run_cli: the sysid binary is not built (SYSID_BUILD_APPS=OFF)");
+#else
   static std::atomic<int> counter{0};
   const std::filesystem::path err_file = std::filesystem::temp_directory_path() /
                                          ("sysid_cli_stderr_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
@@ -115,6 +122,7 @@ inline CliResult run_cli(const std::vector<std::string>& args) {
   std::error_code ec;
   std::filesystem::remove(err_file, ec);
   return r;
+#endif
 }
 
 /// For failure messages: the command's output in full.
