@@ -165,26 +165,34 @@ std::optional<std::pair<double, double>> band_of(const PhysicsBlock& b, const Mi
 std::vector<std::pair<double, double>> explained_windows(const MismatchLocation& loc, const Eigen::MatrixXd& y,
                                                          const Eigen::MatrixXd& nominal, const Eigen::MatrixXd& before,
                                                          const Eigen::MatrixXd& after, Eigen::Index estimation, double Ts) {
-  // Mean squares of the residual centred over the estimation part, as locate_mismatch computes them.
-  const auto window_ms = [&](const Eigen::MatrixXd& sim, Eigen::Index i, Eigen::Index s0, Eigen::Index s1) {
-    const Eigen::VectorXd r = (y.col(i) - sim.col(i)).head(estimation);
-    const double mean = r.mean();
-    return (r.segment(s0, s1 - s0).array() - mean).square().mean();
+  // The residual of a simulation on output i, centred over the estimation part as
+  // locate_mismatch centres it; each is formed once per output.
+  const auto centred = [&](const Eigen::MatrixXd& sim, Eigen::Index i) {
+    Eigen::VectorXd r = (y.col(i) - sim.col(i)).head(estimation);
+    r.array() -= r.mean();
+    return r;
+  };
+  const auto window_ms = [](const Eigen::VectorXd& r, Eigen::Index s0, Eigen::Index s1) {
+    return r.segment(s0, s1 - s0).squaredNorm() / static_cast<double>(s1 - s0);
   };
   std::vector<std::pair<double, double>> out;
-  for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(loc.outputs.size()) && i < y.cols(); ++i)
-    for (const auto& w : loc.outputs[static_cast<std::size_t>(i)].windows) {
+  for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(loc.outputs.size()) && i < y.cols(); ++i) {
+    const auto& windows = loc.outputs[static_cast<std::size_t>(i)].windows;
+    if (std::none_of(windows.begin(), windows.end(), [](const ResidualWindow& w) { return w.flagged; })) continue;
+    const Eigen::VectorXd r_nominal = centred(nominal, i), r_before = centred(before, i), r_after = centred(after, i);
+    for (const auto& w : windows) {
       if (!w.flagged || !(w.energy_ratio > 0.0)) continue;
       const Eigen::Index s0 = std::clamp<Eigen::Index>(std::llround(w.t0_s / Ts), 0, estimation);
       const Eigen::Index s1 = std::clamp<Eigen::Index>(std::llround(w.t1_s / Ts), s0, estimation);
       if (s1 - s0 < 2) continue;
-      const double floor = window_ms(nominal, i, s0, s1) / w.energy_ratio;
-      const double ms_before = window_ms(before, i, s0, s1), ms_after = window_ms(after, i, s0, s1);
+      const double floor = window_ms(r_nominal, s0, s1) / w.energy_ratio;
+      const double ms_before = window_ms(r_before, s0, s1), ms_after = window_ms(r_after, s0, s1);
       if (ms_before > floor && ms_before - ms_after >= 0.5 * (ms_before - floor)) {
         const std::pair<double, double> t{w.t0_s, w.t1_s};
         if (std::find(out.begin(), out.end(), t) == out.end()) out.push_back(t);
       }
     }
+  }
   std::sort(out.begin(), out.end());
   return out;
 }
