@@ -107,24 +107,23 @@ bool g_hold_given = false;
 
 void add_hold_option(CLI::App& cmd) {
   cmd.add_option("--hold", g_hold,
-                 "how a continuous-time model is sampled at the log's rate: zoh (inputs held between samples, e.g. by "
-                 "a DAC) or foh (first-order hold: smooth signals that were only sampled)")
+                 "how a continuous-time model is sampled (at the log's rate; reduce --fem: at --ts): zoh (inputs held "
+                 "between samples, e.g. by a DAC) or foh (first-order hold: smooth signals that were only sampled, "
+                 "where zoh lags by half a sample)")
       ->check(CLI::IsMember({"zoh", "foh"}))
       ->capture_default_str()
       ->each([](const std::string&) { g_hold_given = true; });
 }
 
+Hold selected_hold() { return g_hold == "foh" ? Hold::foh : Hold::zoh; }
+
 StateSpace model_for_sample_time(const ModelFile& file, double ts, const std::string& model_path, const std::string& verb) {
   if (file.model.is_discrete() && g_hold_given)
     warn(verb, model_path + " is a discrete-time model: --hold applies only to continuous-time models and is ignored");
   if (!file.model.is_discrete()) {
-    const bool foh = g_hold == "foh";
-    note(verb, model_path + " is a continuous-time model: discretised with a " + (foh ? "first" : "zero") +
-                   "-order hold at Ts = " + fmt(ts) + " s");
-    StateSpace d = c2d(file.model, ts, foh ? Hold::foh : Hold::zoh);
-    d.input_names = file.model.input_names;
-    d.output_names = file.model.output_names;
-    return d;
+    note(verb, model_path + " is a continuous-time model: discretised with a " +
+                   (selected_hold() == Hold::foh ? "first" : "zero") + "-order hold at Ts = " + fmt(ts) + " s");
+    return c2d(file.model, ts, selected_hold());  // names kept
   }
   if (std::abs(file.model.Ts - ts) > 1e-6 * file.model.Ts)
     throw DataError(model_path, 0, 0,

@@ -2,6 +2,7 @@
 // Shared pieces of the sysid verbs: the log options every data-reading verb takes
 // (--inputs/--outputs/--ts/--time-column/--nan-policy), loading a log with its time
 // column, model files, number formatting and messages. No algorithm lives here.
+#include <sysid/core/discretize.hpp>
 #include <sysid/core/errors.hpp>
 #include <sysid/core/io_data.hpp>
 #include <sysid/io/csv.hpp>
@@ -69,6 +70,8 @@ StateSpace model_for_sample_time(const ModelFile& file, double ts, const std::st
 /// model_for_sample_time) to a verb that runs a model on a log. Like --force, a
 /// process-wide setting: one verb runs per process.
 void add_hold_option(CLI::App& cmd);
+/// The hold chosen by --hold (zoh when not given).
+Hold selected_hold();
 
 /// The model's channel names: the given list, else the model's names (u1.., y1.. when absent).
 std::vector<std::string> model_input_names(const ModelFile& file);

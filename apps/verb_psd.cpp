@@ -34,11 +34,11 @@ struct PsdArgs {
   std::string out, plot;
 };
 
-/// One model's predicted spectrum of the analysed columns it has as outputs.
+/// One model's predicted spectrum of each analysed column it has as an output.
 struct ModelCurves {
   std::string path;
-  std::vector<Eigen::Index> column;  ///< per model output: index into the analysed columns, -1 if not analysed
-  ModelSpectrum spectrum;
+  std::vector<Eigen::Index> column;  ///< index into the analysed columns
+  std::vector<Eigen::VectorXd> psd;  ///< the model's output PSD for that column
 };
 
 std::vector<std::string> with_unique(std::vector<std::string> names, const std::vector<std::string>& more) {
@@ -64,12 +64,13 @@ ModelCurves model_curves(const ModelFile& file, const std::string& path, const s
   ModelCurves mc;
   mc.path = path;
   const std::vector<std::string> outputs = model_output_names(file), inputs = model_input_names(file);
-  bool any = false;
-  for (const auto& name : outputs) {
-    mc.column.push_back(position(columns, name));
-    any = any || mc.column.back() >= 0;
-  }
-  if (!any)
+  std::vector<Eigen::Index> model_output;  // the model output of each analysed column
+  for (std::size_t r = 0; r < outputs.size(); ++r)
+    if (const Eigen::Index c = position(columns, outputs[r]); c >= 0) {
+      mc.column.push_back(c);
+      model_output.push_back(static_cast<Eigen::Index>(r));
+    }
+  if (mc.column.empty())
     throw DataError(path + ": none of the model's outputs (" + join(outputs) + ") is among --columns (" + join(columns) + ")");
   std::vector<Eigen::MatrixXcd> input_csd;
   if (!inputs.empty()) {
@@ -82,9 +83,11 @@ ModelCurves model_curves(const ModelFile& file, const std::string& path, const s
       throw DataError(path + ": a model without inputs needs a disturbance model (K and noise_covariance of a discrete model) for a spectrum");
     warn(verb, path + " has no discrete disturbance model (K, noise_covariance): its curve is the input part G Phi_u G^H alone");
   }
-  mc.spectrum = discrete_noise_model ? model_output_spectrum(model, file.K, file.noise_covariance, ps.freq_hz, input_csd)
-                                     : model_output_spectrum(model, Eigen::MatrixXd(), Eigen::MatrixXd(), ps.freq_hz, input_csd);
-  for (const auto& w : mc.spectrum.warnings) warn(verb, path + ": " + w);
+  const ModelSpectrum spectrum =
+      model_output_spectrum(model, discrete_noise_model ? file.K : Eigen::MatrixXd(),
+                            discrete_noise_model ? file.noise_covariance : Eigen::MatrixXd(), ps.freq_hz, input_csd);
+  for (const auto& w : spectrum.warnings) warn(verb, path + ": " + w);
+  for (const Eigen::Index r : model_output) mc.psd.push_back(spectrum.output_psd.col(r));
   return mc;
 }
 
@@ -142,9 +145,8 @@ void run_psd(const PsdArgs& a) {
     for (std::size_t k = 0; k < models.size(); ++k)
       for (std::size_t r = 0; r < models[k].column.size(); ++r) {
         const Eigen::Index c = models[k].column[r];
-        if (c < 0) continue;
-        const SpectrumAgreement ag = spectrum_agreement(ps.psd.col(c), models[k].spectrum.output_psd.col(static_cast<Eigen::Index>(r)),
-                                                        ps.freq_hz, f_lo, f_hi, lo_factor, hi_factor);
+        const SpectrumAgreement ag =
+            spectrum_agreement(ps.psd.col(c), models[k].psd[r], ps.freq_hz, f_lo, f_hi, lo_factor, hi_factor);
         std::cout << "  model" << k + 1 << " (" << models[k].path << "), " << columns[static_cast<std::size_t>(c)] << ": level "
                   << (ag.median_db >= 0 ? "+" : "") << fmt(ag.median_db, 3) << " dB, shape " << fmt(ag.mean_abs_db, 3) << " dB, "
                   << fmt(100.0 * ag.fraction_inside, 3) << " % of " << ag.bins << " bins inside the "
@@ -159,11 +161,10 @@ void run_psd(const PsdArgs& a) {
       for (const char* p : {"psd_", "psd_lo_", "psd_hi_"}) names.push_back(p + c);
     std::vector<Eigen::VectorXd> model_columns;
     for (std::size_t k = 0; k < models.size(); ++k)
-      for (std::size_t r = 0; r < models[k].column.size(); ++r)
-        if (models[k].column[r] >= 0) {
-          names.push_back("psd_model" + std::to_string(k + 1) + "_" + columns[static_cast<std::size_t>(models[k].column[r])]);
-          model_columns.push_back(models[k].spectrum.output_psd.col(static_cast<Eigen::Index>(r)));
-        }
+      for (std::size_t r = 0; r < models[k].column.size(); ++r) {
+        names.push_back("psd_model" + std::to_string(k + 1) + "_" + columns[static_cast<std::size_t>(models[k].column[r])]);
+        model_columns.push_back(models[k].psd[r]);
+      }
     Eigen::MatrixXd table(nf, 1 + 3 * nc + static_cast<Eigen::Index>(model_columns.size()));
     table.col(0) = ps.freq_hz;
     // DC and Nyquist bins are real-valued: half the degrees of freedom there.
@@ -197,12 +198,10 @@ void run_psd(const PsdArgs& a) {
     }
     for (std::size_t k = 0; k < models.size(); ++k)
       for (std::size_t r = 0; r < models[k].column.size(); ++r) {
-        const Eigen::Index c = models[k].column[r];
-        if (c < 0) continue;
         PlotCurve cv;
-        cv.title = columns[static_cast<std::size_t>(c)] + ", " + models[k].path;
+        cv.title = columns[static_cast<std::size_t>(models[k].column[r])] + ", " + models[k].path;
         cv.x = ps.freq_hz.tail(nf - 1);
-        cv.y = models[k].spectrum.output_psd.col(static_cast<Eigen::Index>(r)).tail(nf - 1);
+        cv.y = models[k].psd[r].tail(nf - 1);
         p.curves.push_back(std::move(cv));
       }
     PlotFigure fig;

@@ -122,7 +122,6 @@ struct ReduceArgs {
   std::string fem_path;
   int modes = 0;
   double ts = 0.0;
-  std::string hold = "zoh";
   bool static_correction = false;
 };
 
@@ -134,19 +133,20 @@ void run_fem_reduce(const ReduceArgs& a) {
   if (a.modes < 1) throw std::invalid_argument("reduce: --fem needs --modes N (the number of lowest modes to keep)");
   if (a.order >= 0 || !a.max_error.empty() || !a.band.empty())
     throw std::invalid_argument("reduce: --order, --max-error and --band apply to state-space models; with --fem use --modes");
-  if (a.hold != "zoh" && !(a.ts > 0.0)) throw CLI::ValidationError("--hold", "applies to a sampled model: give --ts too");
+  const Hold hold = selected_hold();
+  if (hold != Hold::zoh && !(a.ts > 0.0)) throw CLI::ValidationError("--hold", "applies to a sampled model: give --ts too");
   claim_outputs({a.out}, {a.fem_path});
   const fem::SecondOrderModel model = read_fem_model(a.fem_path);
   fem::ModalAnalysisOptions analysis;
   analysis.modes = a.modes;
   fem::ModalModelOptions options;
   options.Ts = a.ts;
-  options.hold = a.hold == "foh" ? Hold::foh : Hold::zoh;
+  options.hold = hold;
   options.static_correction = a.static_correction;
   const fem::ModalModelResult r = fem::modal_model(model, analysis, options);
   const fem::ModalAnalysisResult& m = r.modes;
   std::cout << "modal reduction of " << a.fem_path << ": " << model.dofs() << " DOFs -> " << a.modes << " modes, order "
-            << r.model.order() << (a.ts > 0.0 ? ", sampled at Ts = " + fmt(a.ts) + " s (" + (a.hold == "foh" ? "FOH" : "ZOH") + ")" : ", continuous")
+            << r.model.order() << (a.ts > 0.0 ? ", sampled at Ts = " + fmt(a.ts) + " s (" + (hold == Hold::foh ? "FOH" : "ZOH") + ")" : ", continuous")
             << (a.static_correction ? ", static correction" : "") << "\n"
             << "Lanczos (shift-invert, CHOLMOD): " << m.operator_applications << " solves, " << m.restarts
             << " restarts, largest eigen backward error " << fmt(m.max_relative_residual, 2) << "\n"
@@ -163,7 +163,7 @@ void run_fem_reduce(const ReduceArgs& a) {
   out.provenance["dofs"] = model.dofs();
   out.provenance["modes"] = a.modes;
   out.provenance["static_correction"] = a.static_correction;
-  if (a.ts > 0.0) out.provenance["hold"] = a.hold;
+  if (a.ts > 0.0) out.provenance["hold"] = hold == Hold::foh ? "foh" : "zoh";
   out.provenance["natural_frequencies_hz"] = std::vector<double>(m.natural_frequencies_hz.data(),
                                                                  m.natural_frequencies_hz.data() + m.natural_frequencies_hz.size());
   out.provenance["sysid_version"] = SYSID_VERSION_STRING;
@@ -197,7 +197,7 @@ void run_reduce(const ReduceArgs& a) {
     return;
   }
   if (a.model_path.empty()) throw std::invalid_argument("reduce: give the model file (or --fem MODEL.json --modes N)");
-  if (a.hold != "zoh") throw CLI::ValidationError("--hold", "samples a finite-element model: it needs --fem and --ts");
+  if (selected_hold() != Hold::zoh) throw CLI::ValidationError("--hold", "samples a finite-element model: it needs --fem and --ts");
   if (a.modes > 0 || a.ts > 0.0 || a.static_correction)
     throw std::invalid_argument("reduce: --modes, --ts and --static-correction need --fem");
   claim_outputs({a.out}, {a.model_path});
@@ -296,11 +296,7 @@ Verb register_reduce(CLI::App& app) {
   cmd->add_option("--modes", args->modes, "with --fem: number of lowest modes to keep")->check(CLI::Range(1, 100000));
   cmd->add_option("--ts", args->ts, "with --fem: sample the reduced model at Ts seconds (with --hold); default continuous")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--hold", args->hold,
-                  "with --fem --ts: zoh (inputs held between samples, e.g. by a DAC) or foh (first-order hold: smooth "
-                  "signals that were only sampled, where zoh lags by half a sample)")
-      ->check(CLI::IsMember({"zoh", "foh"}))
-      ->capture_default_str();
+  add_hold_option(*cmd);
   cmd->add_flag("--static-correction", args->static_correction,
                 "with --fem: add the truncated modes' static contribution to displacement outputs");
   cmd->footer(

@@ -13,10 +13,19 @@
 
 namespace sysid {
 
-StateSpace c2d_zoh(const StateSpace& continuous, double Ts) {
+namespace {
+
+/// The preconditions shared by the c2d conversions.
+void check_sampling(const StateSpace& continuous, double Ts, const std::string& who) {
   continuous.validate();
-  if (continuous.Ts != 0.0) throw std::invalid_argument("c2d_zoh: need a continuous model (Ts == 0)");
-  if (!(Ts > 0.0) || !std::isfinite(Ts)) throw std::invalid_argument("c2d_zoh: need sample time Ts > 0");
+  if (continuous.Ts != 0.0) throw std::invalid_argument(who + ": need a continuous model (Ts == 0)");
+  if (!(Ts > 0.0) || !std::isfinite(Ts)) throw std::invalid_argument(who + ": need sample time Ts > 0");
+}
+
+}  // namespace
+
+StateSpace c2d_zoh(const StateSpace& continuous, double Ts) {
+  check_sampling(continuous, Ts, "c2d_zoh");
   const Eigen::Index n = continuous.order(), m = continuous.inputs();
   Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n + m, n + m);
   M.topLeftCorner(n, n) = continuous.A * Ts;
@@ -30,9 +39,7 @@ StateSpace c2d_zoh(const StateSpace& continuous, double Ts) {
 }
 
 StateSpace c2d_foh(const StateSpace& continuous, double Ts) {
-  continuous.validate();
-  if (continuous.Ts != 0.0) throw std::invalid_argument("c2d_foh: need a continuous model (Ts == 0)");
-  if (!(Ts > 0.0) || !std::isfinite(Ts)) throw std::invalid_argument("c2d_foh: need sample time Ts > 0");
+  check_sampling(continuous, Ts, "c2d_foh");
   const Eigen::Index n = continuous.order(), m = continuous.inputs();
   Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n + 2 * m, n + 2 * m);
   M.topLeftCorner(n, n) = continuous.A * Ts;
