@@ -35,7 +35,7 @@ std::string describe_finding(std::size_t rank, const Finding& f) {
 }
 
 /// Outputs drawn at most.
-constexpr Eigen::Index kMaxPlotOutputs = 4;
+constexpr Eigen::Index kDiagnosePlotOutputs = 4;
 
 /// Per output: the residual spectrum before and after on the held-out part with
 /// the located bands shaded, the residual energy by time window against its
@@ -48,7 +48,7 @@ void plot_diagnose(const DiagnoseArgs& a, const LoadedLog& log, const DiagnoseRe
   fig.title = "diagnose " + a.model_path + " on " + a.log_path + ": held-out fit " + fmt(r.fit_before, 4) + " -> " +
               fmt(r.fit_after, 4) + " %";
   fig.columns = 1;
-  for (Eigen::Index i = 0; i < std::min<Eigen::Index>(e.y.cols(), kMaxPlotOutputs); ++i) {
+  for (Eigen::Index i = 0; i < std::min<Eigen::Index>(e.y.cols(), kDiagnosePlotOutputs); ++i) {
     const std::string name = outputs[static_cast<std::size_t>(i)];
     WelchOptions wo;
     wo.nfft = 1024;

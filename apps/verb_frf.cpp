@@ -20,7 +20,7 @@ namespace sysid::cli {
 namespace {
 
 /// Pairs drawn in one plot at most (an 8 x 8 FRF has 64; the CSV has them all).
-constexpr Eigen::Index kMaxPlotPairs = 8;
+constexpr Eigen::Index kFrfPlotPairs = 8;
 
 struct FrfArgs {
   std::string log_path;
@@ -83,8 +83,8 @@ void run_fem_frf(const FrfArgs& a) {
   }
   if (!a.plot.empty()) {
     std::vector<BodeCurve> curves;
-    for (Eigen::Index i = 0; i < l && static_cast<Eigen::Index>(curves.size()) < kMaxPlotPairs; ++i)
-      for (Eigen::Index j = 0; j < m && static_cast<Eigen::Index>(curves.size()) < kMaxPlotPairs; ++j) {
+    for (Eigen::Index i = 0; i < l && static_cast<Eigen::Index>(curves.size()) < kFrfPlotPairs; ++i)
+      for (Eigen::Index j = 0; j < m && static_cast<Eigen::Index>(curves.size()) < kFrfPlotPairs; ++j) {
         BodeCurve b;
         b.title = r.output_names[static_cast<std::size_t>(i)] + " <- " + r.input_names[static_cast<std::size_t>(j)];
         b.f = f;
@@ -166,8 +166,8 @@ void run_frf(const FrfArgs& a) {
     coh.logx = true;
     coh.yrange = std::make_pair(0.0, 1.05);
     Eigen::Index drawn = 0;
-    for (Eigen::Index i = 0; i < l && drawn < kMaxPlotPairs; ++i)
-      for (Eigen::Index j = 0; j < m && drawn < kMaxPlotPairs; ++j, ++drawn) {
+    for (Eigen::Index i = 0; i < l && drawn < kFrfPlotPairs; ++i)
+      for (Eigen::Index j = 0; j < m && drawn < kFrfPlotPairs; ++j, ++drawn) {
         BodeCurve b;
         b.title = outputs[static_cast<std::size_t>(i)] + " <- " + inputs[static_cast<std::size_t>(j)];
         b.f = r.freq_hz;
@@ -193,8 +193,8 @@ void run_frf(const FrfArgs& a) {
         curves.push_back(std::move(b));
         coh.curves.push_back(std::move(c));
       }
-    if (l * m > kMaxPlotPairs)
-      note(verb, "the plot shows the first " + std::to_string(kMaxPlotPairs) + " of " + std::to_string(l * m) +
+    if (l * m > kFrfPlotPairs)
+      note(verb, "the plot shows the first " + std::to_string(kFrfPlotPairs) + " of " + std::to_string(l * m) +
                      " pairs (the CSV has all)");
     PlotFigure fig;
     fig.title = std::string(r.estimator == FrfEstimator::h1 ? "H1" : "H2") + " estimate of " + a.log_path + " (" +

@@ -1,6 +1,7 @@
 // Simulation of a nominal model augmented with physics blocks; the equations are
 // documented in include/sysid/diagnose/augmented_model.hpp.
 #include "sysid/diagnose/augmented_model.hpp"
+#include "sysid/core/math_constants.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -15,7 +16,6 @@ namespace sysid {
 
 namespace {
 
-constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
 bool is_kind(const PhysicsBlock& b, const char* kind) { return b.kind == kind; }
 

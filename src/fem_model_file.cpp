@@ -14,6 +14,7 @@
 
 #include "sysid/core/errors.hpp"
 #include "sysid/io/atomic_file.hpp"
+#include "sysid/io/detail/json_messages.hpp"
 #include "sysid/io/matrix_market.hpp"
 
 namespace sysid {
@@ -25,17 +26,6 @@ namespace fs = std::filesystem;
 const char* const k_top_keys[] = {"type", "mass", "stiffness", "damping", "inputs", "outputs", "length_unit",
                                   "description"};
 
-/// What a value looks like, for "found ..." in messages: short values verbatim.
-std::string describe(const json& j) {
-  if (j.is_structured()) return std::string("a JSON ") + j.type_name();
-  std::string s = j.dump();
-  if (s.size() > 40) s = s.substr(0, 40) + "...";
-  return s;
-}
-
-/// Message-only DataError; read_fem_model adds the JSON file name.
-[[noreturn]] void fail(const std::string& key, const std::string& message) { throw DataError(key + ": " + message); }
-
 std::string join(const std::string& where, const std::string& key) { return where.empty() ? key : where + "." + key; }
 
 template <std::size_t N>
@@ -46,28 +36,28 @@ void refuse_unknown_keys(const json& obj, const std::string& where, const char* 
       continue;
     std::string list;
     for (const char* k : allowed) list += (list.empty() ? "" : ", ") + std::string(k);
-    fail(join(where, item.key()), "unknown key (accepted here: " + list + ")");
+    detail::throw_data_error_at(join(where, item.key()), "unknown key (accepted here: " + list + ")");
   }
 }
 
 const json& required(const json& obj, const std::string& where, const char* key) {
   if (!obj.contains(key)) {
     if (where.empty()) throw DataError(std::string("missing required key '") + key + "'");
-    fail(where, std::string("missing required key '") + key + "'");
+    detail::throw_data_error_at(where, std::string("missing required key '") + key + "'");
   }
   return obj[key];
 }
 
 std::string string_value(const json& j, const std::string& key, bool allow_empty) {
   if (!j.is_string() || (!allow_empty && j.get<std::string>().empty()))
-    fail(key, std::string("expected a ") + (allow_empty ? "" : "non-empty ") + "string, found " + describe(j));
+    detail::throw_data_error_at(key, std::string("expected a ") + (allow_empty ? "" : "non-empty ") + "string, found " + detail::describe_json_value(j));
   return j.get<std::string>();
 }
 
 double non_negative_number(const json& j, const std::string& key) {
-  if (!j.is_number()) fail(key, "expected a number >= 0, found " + describe(j));
+  if (!j.is_number()) detail::throw_data_error_at(key, "expected a number >= 0, found " + detail::describe_json_value(j));
   const double v = j.get<double>();
-  if (!std::isfinite(v) || v < 0.0) fail(key, "expected a number >= 0, found " + describe(j));
+  if (!std::isfinite(v) || v < 0.0) detail::throw_data_error_at(key, "expected a number >= 0, found " + detail::describe_json_value(j));
   return v;
 }
 
@@ -75,20 +65,20 @@ Eigen::Index dof_value(const json& j, const std::string& key) {
   const std::string expected = "expected a non-negative integer (0-based row of the matrices), found ";
   if (j.is_number_unsigned()) {
     const auto v = j.get<std::uint64_t>();
-    if (v > static_cast<std::uint64_t>(std::numeric_limits<Eigen::Index>::max())) fail(key, expected + describe(j));
+    if (v > static_cast<std::uint64_t>(std::numeric_limits<Eigen::Index>::max())) detail::throw_data_error_at(key, expected + detail::describe_json_value(j));
     return static_cast<Eigen::Index>(v);
   }
-  if (!j.is_number_integer() || j.get<std::int64_t>() < 0) fail(key, expected + describe(j));
+  if (!j.is_number_integer() || j.get<std::int64_t>() < 0) detail::throw_data_error_at(key, expected + detail::describe_json_value(j));
   return static_cast<Eigen::Index>(j.get<std::int64_t>());
 }
 
 const json& object_value(const json& j, const std::string& key) {
-  if (!j.is_object()) fail(key, "expected an object {...}, found " + describe(j));
+  if (!j.is_object()) detail::throw_data_error_at(key, "expected an object {...}, found " + detail::describe_json_value(j));
   return j;
 }
 
 const json& list_value(const json& j, const std::string& key) {
-  if (!j.is_array() || j.empty()) fail(key, "expected a non-empty list [...], found " + describe(j));
+  if (!j.is_array() || j.empty()) detail::throw_data_error_at(key, "expected a non-empty list [...], found " + detail::describe_json_value(j));
   return j;
 }
 
@@ -120,7 +110,7 @@ void read_damping(const json& root, fem::SecondOrderModel& model, MatrixNames& n
       ++count;
   }
   if (count != 1 || d.size() != 1)
-    fail("damping", "expected exactly one of matrix, rayleigh, modal_ratio, found " +
+    detail::throw_data_error_at("damping", "expected exactly one of matrix, rayleigh, modal_ratio, found " +
                         (found.empty() ? std::string("none") : found));
   if (d.contains("matrix")) {
     model.damping.kind = fem::DampingKind::matrix;
@@ -162,12 +152,12 @@ void read_signals(const json& root, fem::SecondOrderModel& model, const std::str
     output.name = string_value(required(s, where, "name"), where + ".name", false);
     output.dof = dof_value(required(s, where, "dof"), where + ".dof");
     const json& q = required(s, where, "quantity");
-    const std::string quantity_expected = "expected displacement, velocity or acceleration, found " + describe(q);
-    if (!q.is_string()) fail(where + ".quantity", quantity_expected);
+    const std::string quantity_expected = "expected displacement, velocity or acceleration, found " + detail::describe_json_value(q);
+    if (!q.is_string()) detail::throw_data_error_at(where + ".quantity", quantity_expected);
     try {
       output.quantity = fem::quantity_from_name(q.get<std::string>());
     } catch (const std::invalid_argument&) {
-      fail(where + ".quantity", quantity_expected);
+      detail::throw_data_error_at(where + ".quantity", quantity_expected);
     }
     output.unit = s.contains("unit") ? string_value(s["unit"], where + ".unit", true)
                                      : default_output_unit(output.quantity, length_unit);
@@ -177,10 +167,10 @@ void read_signals(const json& root, fem::SecondOrderModel& model, const std::str
 
 /// Everything but the matrices themselves.
 fem::SecondOrderModel model_from_root(const json& root, MatrixNames& names) {
-  if (!root.is_object()) throw DataError("expected a JSON object {...} at the top level, found " + describe(root));
+  if (!root.is_object()) throw DataError("expected a JSON object {...} at the top level, found " + detail::describe_json_value(root));
   refuse_unknown_keys(root, "", k_top_keys);
   const json& type = required(root, "", "type");
-  if (!type.is_string() || type.get<std::string>() != "fem") fail("type", "expected \"fem\", found " + describe(type));
+  if (!type.is_string() || type.get<std::string>() != "fem") detail::throw_data_error_at("type", "expected \"fem\", found " + detail::describe_json_value(type));
 
   fem::SecondOrderModel model;
   names.mass = string_value(required(root, "", "mass"), "mass", false);

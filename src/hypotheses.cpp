@@ -1,6 +1,7 @@
 // Detectors of the physics hypotheses; the method is documented in
 // include/sysid/diagnose/hypotheses.hpp.
 #include "sysid/diagnose/hypotheses.hpp"
+#include "sysid/core/math_constants.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -12,7 +13,6 @@ namespace sysid {
 
 namespace {
 
-constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr double kTiny = std::numeric_limits<double>::min();
 
 /// The eigen-decomposition of the nominal's continuous equivalent A = V diag(p) V^-1,

@@ -1,6 +1,7 @@
 // Implementation of io/markov_file.hpp.
 #include <sysid/core/errors.hpp>
 #include <sysid/io/atomic_file.hpp>
+#include <sysid/io/detail/json_messages.hpp>
 #include <sysid/io/markov_file.hpp>
 
 #include <fstream>
@@ -20,18 +21,16 @@ nlohmann::json matrix_json(const Eigen::MatrixXd& m) {
   return rows;
 }
 
-[[noreturn]] void fail(const std::string& path, const std::string& what) { throw DataError(path + ": " + what); }
-
 Eigen::MatrixXd matrix_from(const nlohmann::json& j, const std::string& path, const std::string& name) {
-  if (!j.is_array() || j.empty() || !j.front().is_array()) fail(path, name + ": expected a list of rows of numbers");
+  if (!j.is_array() || j.empty() || !j.front().is_array()) detail::throw_data_error_at(path, name + ": expected a list of rows of numbers");
   const std::size_t rows = j.size(), cols = j.front().size();
   Eigen::MatrixXd m(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(cols));
   for (std::size_t r = 0; r < rows; ++r) {
     if (!j[r].is_array() || j[r].size() != cols)
-      fail(path, name + ": expected " + std::to_string(rows) + " rows of " + std::to_string(cols) + " numbers, row " +
+      detail::throw_data_error_at(path, name + ": expected " + std::to_string(rows) + " rows of " + std::to_string(cols) + " numbers, row " +
                      std::to_string(r + 1) + " differs");
     for (std::size_t c = 0; c < cols; ++c) {
-      if (!j[r][c].is_number()) fail(path, name + ": row " + std::to_string(r + 1) + " column " + std::to_string(c + 1) + " is not a number");
+      if (!j[r][c].is_number()) detail::throw_data_error_at(path, name + ": row " + std::to_string(r + 1) + " column " + std::to_string(c + 1) + " is not a number");
       m(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(c)) = j[r][c].get<double>();
     }
   }
@@ -63,32 +62,32 @@ void write_markov_file(const std::string& path, const MarkovFile& file) {
 
 MarkovFile read_markov_file(const std::string& path) {
   std::ifstream in(path);
-  if (!in) fail(path, "cannot open the file");
+  if (!in) detail::throw_data_error_at(path, "cannot open the file");
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(in);
   } catch (const nlohmann::json::parse_error& e) {
-    fail(path, std::string("invalid JSON: ") + e.what());
+    detail::throw_data_error_at(path, std::string("invalid JSON: ") + e.what());
   }
   if (!j.is_object() || j.value("type", std::string()) != "markov")
-    fail(path, "expected a Markov-parameter file (\"type\": \"markov\", written by sysid lms or sysid okid)");
+    detail::throw_data_error_at(path, "expected a Markov-parameter file (\"type\": \"markov\", written by sysid lms or sysid okid)");
   MarkovFile f;
-  if (!j.contains("Ts") || !j["Ts"].is_number()) fail(path, "Ts: expected a number");
+  if (!j.contains("Ts") || !j["Ts"].is_number()) detail::throw_data_error_at(path, "Ts: expected a number");
   f.markov.Ts = j["Ts"].get<double>();
-  if (!j.contains("markov") || !j["markov"].is_array() || j["markov"].empty()) fail(path, "markov: expected a non-empty list of matrices");
+  if (!j.contains("markov") || !j["markov"].is_array() || j["markov"].empty()) detail::throw_data_error_at(path, "markov: expected a non-empty list of matrices");
   for (std::size_t k = 0; k < j["markov"].size(); ++k)
     f.markov.h.push_back(matrix_from(j["markov"][k], path, "markov[" + std::to_string(k) + "]"));
   try {
     if (j.contains("inputs")) f.markov.input_names = j["inputs"].get<std::vector<std::string>>();
     if (j.contains("outputs")) f.markov.output_names = j["outputs"].get<std::vector<std::string>>();
   } catch (const nlohmann::json::exception&) {
-    fail(path, "inputs/outputs: expected lists of names");
+    detail::throw_data_error_at(path, "inputs/outputs: expected lists of names");
   }
   if (j.contains("provenance")) f.provenance = j["provenance"];
   try {
     f.markov.validate();
   } catch (const std::invalid_argument& e) {
-    fail(path, e.what());
+    detail::throw_data_error_at(path, e.what());
   }
   return f;
 }

@@ -9,6 +9,7 @@
 
 #include "sysid/core/errors.hpp"
 #include "sysid/io/atomic_file.hpp"
+#include "sysid/io/detail/json_messages.hpp"
 
 namespace sysid {
 namespace {
@@ -42,32 +43,22 @@ std::string shape(Eigen::Index rows, Eigen::Index cols) {
          (cols == 1 ? " number" : " numbers");
 }
 
-std::string type_name(const json& j) { return j.type_name(); }
-
-/// What a value looks like, for "found ..." in messages: short values verbatim.
-std::string describe(const json& j) {
-  if (j.is_structured()) return "a " + type_name(j);
-  std::string s = j.dump();
-  if (s.size() > 40) s = s.substr(0, 40) + "...";
-  return s;
-}
-
 // ---- reading -----------------------------------------------------------------
 
 double number_from_json(const json& j, const std::string& key) {
-  if (!j.is_number()) throw DataError(key + ": expected a number, found " + describe(j));
+  if (!j.is_number()) throw DataError(key + ": expected a number, found " + detail::describe_json_value(j));
   const double v = j.get<double>();
   if (!std::isfinite(v)) throw DataError(key + ": NaN or Inf is not allowed in a model file");
   return v;
 }
 
 Eigen::VectorXd vector_from_json(const json& j, const std::string& key) {
-  if (!j.is_array()) throw DataError(key + ": expected a list of numbers, found " + describe(j));
+  if (!j.is_array()) throw DataError(key + ": expected a list of numbers, found " + detail::describe_json_value(j));
   Eigen::VectorXd v(static_cast<Eigen::Index>(j.size()));
   for (std::size_t i = 0; i < j.size(); ++i) {
     const json& e = j[i];
     if (!e.is_number())
-      throw DataError(key + ": entry " + std::to_string(i + 1) + " is not a number (found " + describe(e) + ")");
+      throw DataError(key + ": entry " + std::to_string(i + 1) + " is not a number (found " + detail::describe_json_value(e) + ")");
     v(static_cast<Eigen::Index>(i)) = e.get<double>();
     if (!std::isfinite(v(static_cast<Eigen::Index>(i))))
       throw DataError(key + ": entry " + std::to_string(i + 1) + " is NaN or Inf");
@@ -77,14 +68,14 @@ Eigen::VectorXd vector_from_json(const json& j, const std::string& key) {
 
 std::vector<std::string> names_from_json(const json& j, const std::string& key, Eigen::Index expected,
                                          const char* per) {
-  if (!j.is_array()) throw DataError(key + ": expected a list of names, found " + describe(j));
+  if (!j.is_array()) throw DataError(key + ": expected a list of names, found " + detail::describe_json_value(j));
   if (static_cast<Eigen::Index>(j.size()) != expected)
     throw DataError(key + ": expected " + std::to_string(expected) + " names (one per " + per + "), found " +
                     std::to_string(j.size()));
   std::vector<std::string> names;
   for (std::size_t i = 0; i < j.size(); ++i) {
     if (!j[i].is_string())
-      throw DataError(key + ": entry " + std::to_string(i + 1) + " is not a string (found " + describe(j[i]) + ")");
+      throw DataError(key + ": entry " + std::to_string(i + 1) + " is not a string (found " + detail::describe_json_value(j[i]) + ")");
     names.push_back(j[i].get<std::string>());
   }
   return names;
@@ -113,7 +104,7 @@ void read_state_space_part(const json& obj, const std::string& prefix, ModelFile
   ss.Ts = number_from_json(obj["Ts"], prefix + "Ts");
   if (ss.Ts < 0.0)
     throw DataError(prefix + "Ts: expected a sample time >= 0 (seconds; 0 = continuous time), found " +
-                    describe(obj["Ts"]));
+                    detail::describe_json_value(obj["Ts"]));
   ss.A = matrix_from_json(obj["A"], prefix + "A");
   ss.B = matrix_from_json(obj["B"], prefix + "B");
   ss.C = matrix_from_json(obj["C"], prefix + "C");
@@ -160,12 +151,12 @@ void read_state_space_part(const json& obj, const std::string& prefix, ModelFile
 }
 
 ModelFile model_from_root(const json& root) {
-  if (!root.is_object()) throw DataError("expected a JSON object {...} at the top level, found " + describe(root));
+  if (!root.is_object()) throw DataError("expected a JSON object {...} at the top level, found " + detail::describe_json_value(root));
   ModelFile file;
   if (root.contains("type")) {
     const json& t = root["type"];
     if (!t.is_string() || std::find(std::begin(k_types), std::end(k_types), t.get<std::string>()) == std::end(k_types))
-      throw DataError("type: expected \"state-space\", \"polynomial\" or \"augmented\", found " + describe(t));
+      throw DataError("type: expected \"state-space\", \"polynomial\" or \"augmented\", found " + detail::describe_json_value(t));
     file.type = t.get<std::string>();
   }
   const std::string sub_key = sub_object_key(file.type);
@@ -175,7 +166,7 @@ ModelFile model_from_root(const json& root) {
     if (!root.contains(sub_key))
       throw DataError("missing required key '" + sub_key + "' (the state-space form of the " + file.type + " model)");
     const json& sub = root[sub_key];
-    if (!sub.is_object()) throw DataError(sub_key + ": expected an object {...}, found " + describe(sub));
+    if (!sub.is_object()) throw DataError(sub_key + ": expected an object {...}, found " + detail::describe_json_value(sub));
     read_state_space_part(sub, sub_key + ".", file);
     json sub_extra = json::object();
     for (const auto& [key, value] : sub.items())
@@ -194,7 +185,7 @@ ModelFile model_from_root(const json& root) {
   }
   if (root.contains("provenance")) {
     if (!root["provenance"].is_object())
-      throw DataError("provenance: expected an object {...}, found " + describe(root["provenance"]));
+      throw DataError("provenance: expected an object {...}, found " + detail::describe_json_value(root["provenance"]));
     file.provenance = root["provenance"];
   }
 
@@ -337,22 +328,22 @@ json matrix_to_json(const Eigen::MatrixXd& m) {
 
 Eigen::MatrixXd matrix_from_json(const json& j, const std::string& key) {
   const std::string expected = key + ": expected a list of rows, each a list of numbers ([[1, 2], [3, 4]])";
-  if (!j.is_array()) throw DataError(expected + ", found " + describe(j));
+  if (!j.is_array()) throw DataError(expected + ", found " + detail::describe_json_value(j));
   const auto rows = static_cast<Eigen::Index>(j.size());
   if (rows == 0) return Eigen::MatrixXd(0, 0);
-  if (!j[0].is_array()) throw DataError(expected + ", found " + describe(j[0]) + " as row 1");
+  if (!j[0].is_array()) throw DataError(expected + ", found " + detail::describe_json_value(j[0]) + " as row 1");
   const auto cols = static_cast<Eigen::Index>(j[0].size());
   Eigen::MatrixXd m(rows, cols);
   for (Eigen::Index r = 0; r < rows; ++r) {
     const json& row = j[static_cast<std::size_t>(r)];
-    if (!row.is_array()) throw DataError(expected + ", found " + describe(row) + " as row " + std::to_string(r + 1));
+    if (!row.is_array()) throw DataError(expected + ", found " + detail::describe_json_value(row) + " as row " + std::to_string(r + 1));
     if (static_cast<Eigen::Index>(row.size()) != cols)
       throw DataError(key + ": row " + std::to_string(r + 1) + " has " + std::to_string(row.size()) +
                       " numbers, row 1 has " + std::to_string(cols));
     for (Eigen::Index c = 0; c < cols; ++c) {
       const json& e = row[static_cast<std::size_t>(c)];
       const std::string where = "entry (" + std::to_string(r + 1) + "," + std::to_string(c + 1) + ")";
-      if (!e.is_number()) throw DataError(key + ": " + where + " is not a number (found " + describe(e) + ")");
+      if (!e.is_number()) throw DataError(key + ": " + where + " is not a number (found " + detail::describe_json_value(e) + ")");
       m(r, c) = e.get<double>();
       if (!std::isfinite(m(r, c))) throw DataError(key + ": " + where + " is NaN or Inf");
     }
