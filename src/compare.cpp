@@ -11,6 +11,19 @@
 
 namespace sysid {
 
+namespace {
+
+/// compare()'s checks of its options against the model.
+void check_offsets(const StateSpace& sys, const CompareOptions& o) {
+  if (o.input_offset.size() != 0 && o.input_offset.size() != sys.inputs())
+    throw std::invalid_argument("compare: need input_offset of size " + std::to_string(sys.inputs()) + " or empty");
+  if (o.output_offset.size() != 0 && o.output_offset.size() != sys.outputs())
+    throw std::invalid_argument("compare: need output_offset of size " + std::to_string(sys.outputs()) + " or empty");
+  if (o.predict_steps < 0) throw std::invalid_argument("compare: need predict_steps >= 0");
+}
+
+}  // namespace
+
 Eigen::VectorXd estimate_initial_state(const StateSpace& sys, const Eigen::MatrixXd& u, const Eigen::MatrixXd& y,
                                        Eigen::Index max_samples) {
   if (max_samples < 1) throw std::invalid_argument("estimate_initial_state: need max_samples >= 1");
@@ -99,20 +112,8 @@ Eigen::MatrixXd predict_k_step(const StateSpace& sys, const Eigen::MatrixXd& K, 
   return yhat;
 }
 
-namespace detail {
-
-void check_offsets(const StateSpace& sys, const CompareOptions& o) {
-  if (o.input_offset.size() != 0 && o.input_offset.size() != sys.inputs())
-    throw std::invalid_argument("compare: need input_offset of size " + std::to_string(sys.inputs()) + " or empty");
-  if (o.output_offset.size() != 0 && o.output_offset.size() != sys.outputs())
-    throw std::invalid_argument("compare: need output_offset of size " + std::to_string(sys.outputs()) + " or empty");
-  if (o.predict_steps < 0) throw std::invalid_argument("compare: need predict_steps >= 0");
-}
-
-}  // namespace detail
-
 CompareResult compare(const StateSpace& sys, const Eigen::MatrixXd& K, const Experiment& data, const CompareOptions& options) {
-  detail::check_offsets(sys, options);
+  check_offsets(sys, options);
   if (data.u.rows() != data.y.rows()) throw std::invalid_argument("compare: u and y differ in length");
   if (data.u.cols() != sys.inputs() || data.y.cols() != sys.outputs())
     throw std::invalid_argument("compare: data has " + std::to_string(data.u.cols()) + " input(s) and " +

@@ -1,6 +1,7 @@
 // Implementation of reduce/reduction_error.hpp (method in the header).
 #include <sysid/reduce/detail/reduction_error.hpp>
 #include <sysid/reduce/reduction_error.hpp>
+#include <sysid/core/math_constants.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -59,20 +60,19 @@ std::string ReductionResult::brief_report() const {
 Eigen::VectorXd error_frequency_grid(const Eigen::VectorXcd& poles, double Ts, const ErrorGridOptions& options) {
   if (options.log_points < 2) throw std::invalid_argument("error_frequency_grid: need log_points >= 2");
   if (!(options.decades_below > 0.0)) throw std::invalid_argument("error_frequency_grid: need decades_below > 0");
-  constexpr double two_pi = 2.0 * std::numbers::pi;
   std::vector<double> peak, width;
   double f_min = std::numeric_limits<double>::infinity(), f_max = 0.0;
   for (Eigen::Index i = 0; i < poles.size(); ++i) {
     const std::complex<double> p = poles[i];
     if (Ts > 0.0 && p == 0.0) continue;  // a pure delay: flat response, nothing to resolve
     const std::complex<double> s = Ts > 0.0 ? std::log(p) / Ts : p;
-    const double fn = std::abs(s) / two_pi;
+    const double fn = std::abs(s) / kTwoPi;
     if (!std::isfinite(fn)) continue;
     if (fn > 0.0) f_min = std::min(f_min, fn);
     f_max = std::max(f_max, fn);
     if (p.imag() > 0.0) {
-      peak.push_back(std::abs(s.imag()) / two_pi);
-      width.push_back(std::abs(s.real()) / two_pi);
+      peak.push_back(std::abs(s.imag()) / kTwoPi);
+      width.push_back(std::abs(s.real()) / kTwoPi);
     }
   }
   double f_hi = Ts > 0.0 ? 0.5 / Ts : (f_max > 0.0 ? 10.0 * f_max : 1.0);

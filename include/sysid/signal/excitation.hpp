@@ -8,6 +8,8 @@
 /// can be regenerated from its options alone. std::mt19937_64 is fully specified by
 /// the C++ standard; the uniform phases are drawn from its raw output (not through
 /// std::uniform_real_distribution, whose algorithm is implementation-defined).
+#include <sysid/core/math_constants.hpp>
+
 #include <Eigen/Dense>
 #include <unsupported/Eigen/FFT>
 
@@ -62,7 +64,6 @@ inline Eigen::VectorXd chirp(const ChirpOptions& o) {
   if (!(samples >= 1.0)) throw bad("round(duration * fs) >= 1");
 
   const auto n = static_cast<Eigen::Index>(samples);
-  const double two_pi = 2.0 * std::numbers::pi;
   const double T = o.duration_s;
   Eigen::VectorXd x(n);
   const double ratio = o.f1_hz / o.f0_hz;  // used only for the log sweep, where f0 > 0
@@ -72,12 +73,12 @@ inline Eigen::VectorXd chirp(const ChirpOptions& o) {
     const double t = static_cast<double>(k) / o.fs_hz;
     double phase;
     if (!log_sweep) {
-      phase = two_pi * (o.f0_hz * t + (o.f1_hz - o.f0_hz) * t * t / (2.0 * T));
+      phase = kTwoPi * (o.f0_hz * t + (o.f1_hz - o.f0_hz) * t * t / (2.0 * T));
     } else if (log_ratio == 0.0) {
-      phase = two_pi * o.f0_hz * t;
+      phase = kTwoPi * o.f0_hz * t;
     } else {
       // expm1 keeps the small-t phase accurate: r^(t/T) - 1 = expm1((t/T) ln r).
-      phase = two_pi * o.f0_hz * T * std::expm1(t / T * log_ratio) / log_ratio;
+      phase = kTwoPi * o.f0_hz * T * std::expm1(t / T * log_ratio) / log_ratio;
     }
     x(k) = o.amplitude * std::sin(phase);
   }
@@ -193,7 +194,7 @@ inline Eigen::MatrixXd multisine(const MultisineOptions& o) {
   for (Eigen::Index c = 0; c < o.inputs; ++c) {
     std::fill(spectrum.begin(), spectrum.end(), std::complex<double>(0.0, 0.0));
     for (const Eigen::Index k : bins) {
-      const double phi = 2.0 * std::numbers::pi * uniform();
+      const double phi = kTwoPi * uniform();
       // x[n] = (1/P) sum X[k] e^{i 2 pi k n / P}: X[k] = X[P-k]* = (P a / 2) e^{i phi}
       // gives a cos(2 pi k n / P + phi).
       const std::complex<double> X = std::polar(0.5 * static_cast<double>(P) * a, phi);

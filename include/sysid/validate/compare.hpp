@@ -96,12 +96,6 @@ struct CompareResult {
   Eigen::VectorXd x0;           ///< initial state used
 };
 
-namespace detail {
-
-void check_offsets(const StateSpace& sys, const CompareOptions& o);
-
-}  // namespace detail
-
 /// Purpose: fit of a model on one experiment, by simulation (predict_steps = 0) or
 /// k-step prediction, with x0 estimated on the same data or given.
 /// Method: offsets removed; x0 by estimate_initial_state (the simulation-error
