@@ -17,14 +17,15 @@
 
 #include "../support/run_cli.hpp"
 
+namespace test_acceptance_diagnose_concealed {
+
 namespace {
 
 using nlohmann::json;
+using sysid::test::read_json;
 using sysid::test::run_cli;
 
 const std::string kSuite = std::string(SYSID_TEST_DATA_DIR) + "/concealed/";
-
-json read_json(const std::string& path) { return json::parse(sysid::test::read_text_file(path)); }
 
 /// Tolerance for a reported parameter: frequencies within 1 %, a delay within a
 /// tenth of a sample, damping within 25 % (a damping ratio of 0.012 estimated
@@ -95,3 +96,5 @@ INSTANTIATE_TEST_SUITE_P(Suite, Concealed,
                                            "null_isolator"));
 
 }  // namespace
+
+}  // namespace test_acceptance_diagnose_concealed

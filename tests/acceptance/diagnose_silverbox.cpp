@@ -18,6 +18,8 @@
 #include <filesystem>
 #include <iostream>
 
+namespace test_acceptance_diagnose_silverbox {
+
 namespace {
 
 const std::string kSilverbox = std::string(SYSID_SOURCE_DIR) + "/../shared/data/real/silverbox/SNLS80mV.csv";
@@ -66,3 +68,5 @@ TEST(DiagnoseSilverbox, NamesCubicStiffnessAndBeatsThePublishedBaselines) {
 }
 
 }  // namespace
+
+}  // namespace test_acceptance_diagnose_silverbox

@@ -11,6 +11,8 @@
 
 #include "par2_reference.hpp"
 
+namespace test_acceptance_pem_par2 {
+
 using namespace sysid;
 using test::par2_in_band_fit;
 using test::par2_reference;
@@ -50,3 +52,5 @@ TEST(Par2Armax, PaperOrdersConverge) {
   EXPECT_EQ(r.status, PemResult::Status::converged) << r.termination;
   EXPECT_GT(fit, par2_reference().true_fit - 1.0);
 }
+
+}  // namespace test_acceptance_pem_par2

@@ -23,6 +23,8 @@
 #include <iostream>
 #include <numbers>
 
+namespace test_acceptance_pem_par2_gw {
+
 using namespace sysid;
 
 namespace {
@@ -133,3 +135,5 @@ TEST(Par2Disturbance, ArmaAndArSpectraAgreeWithTheWelchEstimate) {
   const LinearPolynomialResult myw = ar(log, {.na = 16, .method = ArMethod::modified_yule_walker});
   spectrum_against_welch(myw.models.front(), log, 15.0, 45.0, "AR(16), modified Yule-Walker");
 }
+
+}  // namespace test_acceptance_pem_par2_gw

@@ -29,6 +29,8 @@
 
 #include "run_cli.hpp"
 
+namespace test_acceptance_realization_isolator {
+
 using namespace sysid;
 using namespace sysid::test;
 
@@ -260,3 +262,5 @@ TEST(IsolatorReproduction, HammerTapsOkidEraAssembleReduce) {
   EXPECT_LE(e24, f24 + kFloorMargin);
   EXPECT_LE(e10, f10 + kFloorMargin);
 }
+
+}  // namespace test_acceptance_realization_isolator

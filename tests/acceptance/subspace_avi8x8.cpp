@@ -11,6 +11,8 @@
 
 #include <gtest/gtest.h>
 
+namespace test_acceptance_subspace_avi8x8 {
+
 using namespace sysid;
 
 namespace {
@@ -65,3 +67,5 @@ TEST(Avi8x8Acceptance, AutomaticOrderIsSixteen) {
   const N4sidResult r = n4sid(load("avi8x8.csv"), {});
   EXPECT_EQ(r.order, 16) << r.order_rule;
 }
+
+}  // namespace test_acceptance_subspace_avi8x8

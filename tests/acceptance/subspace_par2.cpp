@@ -9,6 +9,8 @@
 
 #include "par2_reference.hpp"
 
+namespace test_acceptance_subspace_par2 {
+
 using namespace sysid;
 using test::par2_in_band_fit;
 using test::par2_reference;
@@ -53,3 +55,5 @@ TEST_P(Par2Acceptance, AutomaticOrderIsTen) {
 INSTANTIATE_TEST_SUITE_P(Weightings, Par2Acceptance,
                          ::testing::Values(SubspaceWeighting::n4sid, SubspaceWeighting::moesp, SubspaceWeighting::cva),
                          [](const auto& param_info) { return std::string(to_string(param_info.param)); });
+
+}  // namespace test_acceptance_subspace_par2

@@ -9,6 +9,8 @@
 
 #include "run_cli.hpp"
 
+namespace test_app_bad_input {
+
 using namespace sysid;
 using namespace sysid::test;
 
@@ -53,6 +55,10 @@ std::set<std::string> listing(const std::filesystem::path& dir) {
   return names;
 }
 
+}  // namespace
+
+/// A fixture has the linkage of the TEST_F classes derived from it: it stays out of
+/// the anonymous namespace (-Wsubobject-linkage in a unity translation unit).
 class BadInput : public ::testing::Test {
  protected:
   TempDir dir;
@@ -77,8 +83,6 @@ class BadInput : public ::testing::Test {
     return {"n4sid", log, "--inputs", "u", "--outputs", "y", "--out", dir / "model.json"};
   }
 };
-
-}  // namespace
 
 TEST_F(BadInput, TextCell) {
   auto lines = valid_log_lines(400);
@@ -181,3 +185,5 @@ TEST_F(BadInput, UsageErrorsExitOne) {
   EXPECT_EQ(r.exit_code, 1) << describe(r);
   EXPECT_EQ(listing(dir.path()), before);
 }
+
+}  // namespace test_app_bad_input

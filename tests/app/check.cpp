@@ -9,12 +9,13 @@
 
 #include "run_cli.hpp"
 
+namespace test_app_check {
+
 using namespace sysid::test;
 
 namespace {
 
 const std::string kData = std::string(SYSID_TEST_DATA_DIR) + "/";
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 }  // namespace
 
@@ -63,3 +64,5 @@ TEST(CheckApp, MissingColumnIsAUsageErrorNamingIt) {
   EXPECT_EQ(r.exit_code, 2) << describe(r);
   EXPECT_TRUE(contains(r.err, "nope")) << r.err;
 }
+
+}  // namespace test_app_check

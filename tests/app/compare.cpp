@@ -7,6 +7,8 @@
 
 #include "run_cli.hpp"
 
+namespace test_app_compare {
+
 using namespace sysid;
 using namespace sysid::test;
 
@@ -127,3 +129,5 @@ TEST(CompareApp, HelpHasAnExample) {
   EXPECT_NE(r.out.find("sysid compare model.json"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("--predict"), std::string::npos);
 }
+
+}  // namespace test_app_compare

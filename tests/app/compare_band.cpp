@@ -7,6 +7,8 @@
 
 #include "run_cli.hpp"
 
+namespace test_app_compare_band {
+
 using namespace sysid;
 using namespace sysid::test;
 
@@ -60,3 +62,5 @@ TEST(CompareBandApp, BadBand) {
   const CliResult r = run_cli({"compare", dir / "m.json", dir / "log.csv", "--band", "600:700"});
   EXPECT_EQ(r.exit_code, 2) << describe(r);
 }
+
+}  // namespace test_app_compare_band

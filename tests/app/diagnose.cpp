@@ -14,16 +14,14 @@
 
 #include "run_cli.hpp"
 
+namespace test_app_diagnose {
+
 using namespace sysid::test;
 using nlohmann::json;
 
 namespace {
 
 const std::string kSuite = std::string(SYSID_TEST_DATA_DIR) + "/concealed/";
-
-json read_json(const std::string& path) { return json::parse(read_text_file(path)); }
-
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 /// The header and the first `rows` data rows of a CSV file.
 std::string first_rows(const std::string& path, int rows) {
@@ -211,3 +209,5 @@ TEST(DiagnoseApp, ValidateOnAnIndependentRecordingLeadsTheReport) {
   EXPECT_TRUE(contains(r.err, "sample time")) << r.err;
   EXPECT_FALSE(std::filesystem::exists(tmp / "report.json"));
 }
+
+}  // namespace test_app_diagnose

@@ -4,6 +4,8 @@
 
 #include "run_cli.hpp"
 
+namespace test_app_excite {
+
 using namespace sysid;
 using namespace sysid::test;
 
@@ -140,3 +142,5 @@ TEST(ExciteApp, HelpHasAnExample) {
   ASSERT_EQ(r.exit_code, 0) << describe(r);
   EXPECT_NE(r.out.find("sysid excite --signal multisine"), std::string::npos) << r.out;
 }
+
+}  // namespace test_app_excite

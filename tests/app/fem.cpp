@@ -14,15 +14,14 @@
 
 #include "run_cli.hpp"
 
+namespace test_app_fem {
+
 using namespace sysid::test;
 using nlohmann::json;
 
 namespace {
 
 const std::string kFem = std::string(SYSID_TEST_DATA_DIR) + "/fem/";
-
-json read_json(const std::string& path) { return json::parse(read_text_file(path)); }
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 /// The relative error printed by compare --band for the pair "<y> <- F".
 double printed_error(const std::string& out, const std::string& output) {
@@ -182,3 +181,5 @@ TEST(FemApp, BadFeInputIsRefusedWithTheFileNamed) {
   EXPECT_TRUE(contains(r.err, "--band")) << r.err;
   EXPECT_FALSE(std::filesystem::exists(tmp / "m.json"));
 }
+
+}  // namespace test_app_fem

@@ -12,6 +12,8 @@
 
 #include "run_cli.hpp"
 
+namespace test_app_filter {
+
 using namespace sysid;
 using namespace sysid::test;
 
@@ -98,3 +100,5 @@ TEST(FilterApp, BadInputAndUsage) {
   EXPECT_EQ(help.exit_code, 0);
   EXPECT_NE(help.out.find("--lowpass 100 --order 5"), std::string::npos) << help.out;
 }
+
+}  // namespace test_app_filter

@@ -10,6 +10,8 @@
 
 #include "run_cli.hpp"
 
+namespace test_app_frf {
+
 using namespace sysid;
 using namespace sysid::test;
 
@@ -138,3 +140,5 @@ TEST(FrfApp, HelpHasAnExample) {
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_NE(r.out.find("Example"), std::string::npos) << r.out;
 }
+
+}  // namespace test_app_frf

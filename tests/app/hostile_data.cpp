@@ -23,11 +23,11 @@
 
 #include "run_cli.hpp"
 
+namespace test_app_hostile_data {
+
 using namespace sysid::test;
 
 namespace {
-
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 /// A second-order plant y(t) = a1 y(t-1) + a2 y(t-2) + b1 u(t-1) + b2 u(t-2) with
 /// poles r e^{±j theta}.
@@ -448,3 +448,5 @@ TEST_F(HostileData, EraOnScaledZeroShortAndGrowingMarkovParameters) {
 }
 
 }  // namespace
+
+}  // namespace test_app_hostile_data

@@ -5,6 +5,8 @@
 
 #include "run_cli.hpp"
 
+namespace test_app_main {
+
 using namespace sysid::test;
 
 TEST(MainApp, HelpListsEveryVerbWithADescription) {
@@ -32,3 +34,5 @@ TEST(MainApp, NoVerbOrUnknownVerbIsAUsageError) {
   r = run_cli({"identify-everything"});
   EXPECT_EQ(r.exit_code, 1) << describe(r);
 }
+
+}  // namespace test_app_main

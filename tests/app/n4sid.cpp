@@ -12,6 +12,8 @@
 
 #include "run_cli.hpp"
 
+namespace test_app_n4sid {
+
 using namespace sysid;
 using namespace sysid::test;
 
@@ -41,6 +43,10 @@ int printed_order(const std::string& out) {
   return std::regex_search(out, m, re) ? std::stoi(m[1]) : -1;
 }
 
+}  // namespace
+
+/// A fixture has the linkage of the TEST_F classes derived from it: it stays out of
+/// the anonymous namespace (-Wsubobject-linkage in a unity translation unit).
 class N4sidApp : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -61,8 +67,6 @@ class N4sidApp : public ::testing::Test {
 
   static inline std::unique_ptr<TempDir> s_dir;
 };
-
-}  // namespace
 
 TEST_F(N4sidApp, AutoOrderPicksFourAndFitsFreshData) {
   // The singular values drop by ~1000x after the 4th (1 % noise): the gap rule
@@ -231,3 +235,5 @@ TEST_F(N4sidApp, BandLimitIsPassedToTheLibraryAndRecorded) {
   EXPECT_EQ(f.provenance.at("band_limit_hz").get<double>(), 400.0);
   EXPECT_GT(f.model.order(), 4);  // the low-pass is in series with the identified 4th-order model
 }
+
+}  // namespace test_app_n4sid

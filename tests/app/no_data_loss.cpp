@@ -14,16 +14,17 @@
 
 #include "run_cli.hpp"
 
+namespace test_app_no_data_loss {
+
 namespace {
 
 using sysid::test::CliResult;
+using sysid::test::contains;
 using sysid::test::describe;
 using sysid::test::read_text_file;
 using sysid::test::run_cli;
 using sysid::test::TempDir;
 using sysid::test::write_text_file;
-
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 /// Every file in `dir` whose name marks it as a temporary of an atomic write.
 std::vector<std::string> leftover_temporaries(const std::filesystem::path& dir) {
@@ -162,3 +163,5 @@ TEST(NoDataLoss, ARunKilledAtAnyMomentLeavesNoPartialFile) {
 }
 
 }  // namespace
+
+}  // namespace test_app_no_data_loss

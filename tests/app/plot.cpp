@@ -10,6 +10,8 @@
 
 #include "run_cli.hpp"
 
+namespace test_app_plot {
+
 using namespace sysid;
 using namespace sysid::test;
 
@@ -125,3 +127,5 @@ TEST(PlotApp, WithoutGnuplotTheVerbSucceedsAndSaysHowToGetPlots) {
   EXPECT_NE(r.err.find("gnuplot"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("apt-get install gnuplot"), std::string::npos) << r.err;
 }
+
+}  // namespace test_app_plot

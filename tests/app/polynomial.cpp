@@ -9,6 +9,8 @@
 
 #include "run_cli.hpp"
 
+namespace test_app_polynomial {
+
 using namespace sysid;
 using namespace sysid::test;
 
@@ -124,3 +126,5 @@ TEST(PolynomialApp, OrderRangesPrintATableAndWriteTheBest) {
   EXPECT_NE(b.err.find("hi < lo"), std::string::npos) << b.err;
   EXPECT_FALSE(std::filesystem::exists(bad));
 }
+
+}  // namespace test_app_polynomial

@@ -9,6 +9,8 @@
 
 #include "run_cli.hpp"
 
+namespace test_app_psd {
+
 using namespace sysid;
 using namespace sysid::test;
 
@@ -145,3 +147,5 @@ TEST(PsdApp, ModelWithoutASpectrumOrItsChannelsIsRefused) {
   EXPECT_EQ(r.exit_code, 0) << describe(r);
   EXPECT_NE(r.err.find("input part"), std::string::npos) << r.err;
 }
+
+}  // namespace test_app_psd

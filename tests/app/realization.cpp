@@ -9,6 +9,8 @@
 
 #include "run_cli.hpp"
 
+namespace test_app_realization {
+
 using namespace sysid;
 using namespace sysid::test;
 
@@ -88,3 +90,5 @@ TEST(RealizationApp, BadRequestsExitTwoAndWriteNothing) {
     EXPECT_FALSE(std::filesystem::exists(out)) << args[0];
   }
 }
+
+}  // namespace test_app_realization

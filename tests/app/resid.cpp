@@ -9,6 +9,8 @@
 
 #include "run_cli.hpp"
 
+namespace test_app_resid {
+
 using namespace sysid;
 using namespace sysid::test;
 
@@ -191,3 +193,5 @@ TEST(ResidApp, HelpDocumentsTheColumnsAndHasAnExample) {
   const CliResult top = run_cli({"--help"});
   EXPECT_NE(top.out.find("resid"), std::string::npos) << top.out;
 }
+
+}  // namespace test_app_resid

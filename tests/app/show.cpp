@@ -8,6 +8,8 @@
 #include "random_systems.hpp"
 #include "run_cli.hpp"
 
+namespace test_app_show {
+
 using namespace sysid;
 using namespace sysid::test;
 
@@ -80,3 +82,5 @@ TEST(ShowApp, HelpHasAnExample) {
   ASSERT_EQ(r.exit_code, 0) << describe(r);
   EXPECT_NE(r.out.find("sysid show model.json"), std::string::npos) << r.out;
 }
+
+}  // namespace test_app_show

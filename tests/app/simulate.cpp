@@ -7,6 +7,8 @@
 #include "random_systems.hpp"
 #include "run_cli.hpp"
 
+namespace test_app_simulate {
+
 using namespace sysid;
 using namespace sysid::test;
 
@@ -158,3 +160,5 @@ TEST(SimulateApp, HelpHasAnExample) {
   EXPECT_NE(r.out.find("Example"), std::string::npos);
   EXPECT_NE(r.out.find("sysid simulate model.json log.csv"), std::string::npos) << r.out;
 }
+
+}  // namespace test_app_simulate

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 namespace sysid::test {
 
@@ -84,6 +85,12 @@ inline std::string read_text_file(const std::string& path) {
   s << f.rdbuf();
   return s.str();
 }
+
+/// Whether `text` contains `part`.
+inline bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+/// A JSON file (a report, a model), parsed.
+inline nlohmann::json read_json(const std::string& path) { return nlohmann::json::parse(read_text_file(path)); }
 
 inline void write_text_file(const std::string& path, const std::string& text) {
   std::ofstream f(path, std::ios::binary);

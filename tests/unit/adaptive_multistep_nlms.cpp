@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+namespace test_unit_adaptive_multistep_nlms {
+
 namespace {
 
 using Eigen::MatrixXd;
@@ -343,3 +345,5 @@ TEST(AdaptiveMultistepNlms, WarnsAboutZeroInputAndShortRecord) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_adaptive_multistep_nlms

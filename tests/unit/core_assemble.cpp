@@ -8,6 +8,8 @@
 
 #include "random_systems.hpp"
 
+namespace test_unit_core_assemble {
+
 using namespace sysid;
 
 namespace {
@@ -54,3 +56,5 @@ TEST(Assemble, MismatchedPartsAreRefused) {
   EXPECT_THROW(assemble_inputs({a, three_outputs}), std::invalid_argument);
   EXPECT_THROW(assemble_inputs({}), std::invalid_argument);
 }
+
+}  // namespace test_unit_core_assemble

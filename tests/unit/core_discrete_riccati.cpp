@@ -4,6 +4,8 @@
 
 #include "random_systems.hpp"
 
+namespace test_unit_core_discrete_riccati {
+
 using namespace sysid;
 
 TEST(KalmanFilter, SolvesTheFilterRiccatiEquation) {
@@ -46,3 +48,5 @@ TEST(KalmanFilter, NonPositiveMeasurementNoiseIsReported) {
   EXPECT_EQ(kf.status, KalmanFilterResult::Status::failed);
   EXPECT_FALSE(kf.message.empty());
 }
+
+}  // namespace test_unit_core_discrete_riccati

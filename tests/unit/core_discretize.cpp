@@ -13,6 +13,9 @@
 #include <numbers>
 #include <random>
 #include <stdexcept>
+#include "random_matrices.hpp"
+
+namespace test_unit_core_discretize {
 
 namespace {
 
@@ -20,28 +23,9 @@ using Eigen::MatrixXcd;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 using Complex = std::complex<double>;
-constexpr double kPi = std::numbers::pi;
-
-MatrixXd randn(std::mt19937_64& rng, Eigen::Index r, Eigen::Index c) {
-  std::normal_distribution<double> g;
-  MatrixXd m(r, c);
-  for (Eigen::Index j = 0; j < c; ++j)
-    for (Eigen::Index i = 0; i < r; ++i) m(i, j) = g(rng);
-  return m;
-}
-
-/// Random similarity with condition number <= e^1.4 ~ 4: Q1 diag(e^u) Q2 with
-/// orthogonal Q1, Q2 and u uniform in [-0.7, 0.7]. (I + noise can be nearly
-/// singular for larger n and would turn a test of the algorithm into a test of
-/// an ill-conditioned eigenproblem.)
-MatrixXd well_conditioned(std::mt19937_64& rng, Eigen::Index n) {
-  std::uniform_real_distribution<double> u(-0.7, 0.7);
-  const MatrixXd Q1 = Eigen::HouseholderQR<MatrixXd>(randn(rng, n, n)).householderQ();
-  const MatrixXd Q2 = Eigen::HouseholderQR<MatrixXd>(randn(rng, n, n)).householderQ();
-  Eigen::VectorXd d(n);
-  for (Eigen::Index i = 0; i < n; ++i) d[i] = std::exp(u(rng));
-  return Q1 * d.asDiagonal() * Q2;
-}
+using sysid::test::kPi;
+using sysid::test::randn;
+using sysid::test::well_conditioned;
 
 /// Random stable continuous model whose poles satisfy |Im s| Ts < 0.8 pi (no
 /// aliasing, so d2c can recover it) and Re s in [-0.5, -0.01] / Ts.
@@ -238,3 +222,5 @@ TEST(CoreDiscretize, SubnormalSampleTimeIsANumericalErrorNotACrash) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_core_discretize

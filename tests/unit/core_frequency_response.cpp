@@ -10,6 +10,9 @@
 #include <limits>
 #include <numbers>
 #include <random>
+#include "random_matrices.hpp"
+
+namespace test_unit_core_frequency_response {
 
 namespace {
 
@@ -18,15 +21,8 @@ using Eigen::MatrixXd;
 using Eigen::VectorXd;
 using Complex = std::complex<double>;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
-constexpr double kPi = std::numbers::pi;
-
-MatrixXd randn(std::mt19937_64& rng, Eigen::Index r, Eigen::Index c) {
-  std::normal_distribution<double> g;
-  MatrixXd m(r, c);
-  for (Eigen::Index j = 0; j < c; ++j)
-    for (Eigen::Index i = 0; i < r; ++i) m(i, j) = g(rng);
-  return m;
-}
+using sysid::test::kPi;
+using sysid::test::randn;
 
 /// Random stable model: discrete with spectral radius `radius`, or continuous
 /// with spectral abscissa -0.1 (A shifted left).
@@ -164,3 +160,5 @@ TEST(CoreFrequencyResponse, StaticGainAndEmptyGrid) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_core_frequency_response

@@ -7,6 +7,8 @@
 
 #include "random_systems.hpp"
 
+namespace test_unit_core_input_collinearity {
+
 
 TEST(InputCollinearity, NamesTheCollinearPairOnly) {
   Eigen::MatrixXd u = sysid::test::white_noise(2000, 3, 1);
@@ -37,3 +39,5 @@ TEST(InputCollinearity, N4sidWarnsOnTwinInputs) {
   for (const auto& w : r.warnings) named |= w.find("inputs u1 and u2 are collinear") != std::string::npos;
   EXPECT_TRUE(named);
 }
+
+}  // namespace test_unit_core_input_collinearity

@@ -5,6 +5,8 @@
 
 #include "random_systems.hpp"
 
+namespace test_unit_core_interconnect {
+
 using namespace sysid;
 
 TEST(Interconnect, SeriesResponseIsTheProduct) {
@@ -40,3 +42,5 @@ TEST(Interconnect, MismatchedModelsAreRejected) {
   g3.Ts = 0.5;
   EXPECT_THROW(block_diagonal({g2, g3}), std::invalid_argument);
 }
+
+}  // namespace test_unit_core_interconnect

@@ -8,6 +8,8 @@
 #include <numbers>
 #include <random>
 
+namespace test_unit_core_isolated_spikes {
+
 namespace {
 
 using Eigen::VectorXd;
@@ -103,3 +105,5 @@ TEST(IsolatedSpikes, WarningCountsAcrossExperimentsAndSparesInputImpulses) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_core_isolated_spikes

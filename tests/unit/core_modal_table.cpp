@@ -10,11 +10,14 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include "random_matrices.hpp"
+
+namespace test_unit_core_modal_table {
 
 namespace {
 
 using Eigen::MatrixXd;
-constexpr double kPi = std::numbers::pi;
+using sysid::test::kPi;
 
 /// Chain of masses m_i, springs k_i (to the previous mass / ground), dampers
 /// c_i, force on mass 0, position of the last mass measured.
@@ -147,3 +150,5 @@ TEST(CoreModalTable, FormatIsAlignedAndShowsDampingAsRatio) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_core_modal_table

@@ -8,6 +8,8 @@
 #include <numbers>
 #include <random>
 
+namespace test_unit_core_persistent_excitation {
+
 namespace {
 
 using Eigen::VectorXd;
@@ -92,3 +94,5 @@ TEST(PersistentExcitation, PreconditionsAreChecked) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_core_persistent_excitation

@@ -14,6 +14,9 @@
 #include <random>
 #include <stdexcept>
 #include <vector>
+#include "random_matrices.hpp"
+
+namespace test_unit_core_poles_zeros {
 
 namespace {
 
@@ -23,49 +26,9 @@ using Eigen::VectorXcd;
 using Eigen::VectorXd;
 using Complex = std::complex<double>;
 
-MatrixXd randn(std::mt19937_64& rng, Eigen::Index r, Eigen::Index c) {
-  std::normal_distribution<double> g;
-  MatrixXd m(r, c);
-  for (Eigen::Index j = 0; j < c; ++j)
-    for (Eigen::Index i = 0; i < r; ++i) m(i, j) = g(rng);
-  return m;
-}
-
-/// Random similarity with condition number <= e^1.4 ~ 4: Q1 diag(e^u) Q2 with
-/// orthogonal Q1, Q2 and u uniform in [-0.7, 0.7]. (I + noise can be nearly
-/// singular for larger n and would turn a test of the algorithm into a test of
-/// an ill-conditioned eigenproblem.)
-MatrixXd well_conditioned(std::mt19937_64& rng, Eigen::Index n) {
-  std::uniform_real_distribution<double> u(-0.7, 0.7);
-  const MatrixXd Q1 = Eigen::HouseholderQR<MatrixXd>(randn(rng, n, n)).householderQ();
-  const MatrixXd Q2 = Eigen::HouseholderQR<MatrixXd>(randn(rng, n, n)).householderQ();
-  Eigen::VectorXd d(n);
-  for (Eigen::Index i = 0; i < n; ++i) d[i] = std::exp(u(rng));
-  return Q1 * d.asDiagonal() * Q2;
-}
-
-/// Largest distance from an expected root to its match (greedy nearest, each
-/// computed root used once); +inf if the counts differ.
-double match_error(const VectorXcd& expected, const VectorXcd& computed) {
-  if (expected.size() != computed.size()) return std::numeric_limits<double>::infinity();
-  std::vector<bool> used(static_cast<std::size_t>(computed.size()), false);
-  double worst = 0.0;
-  for (Eigen::Index i = 0; i < expected.size(); ++i) {
-    double best = std::numeric_limits<double>::infinity();
-    std::size_t arg = 0;
-    for (Eigen::Index j = 0; j < computed.size(); ++j) {
-      const double d = std::abs(expected[i] - computed[j]);
-      if (!used[static_cast<std::size_t>(j)] && d < best) {
-        best = d;
-        arg = static_cast<std::size_t>(j);
-      }
-    }
-    used[arg] = true;
-    worst = std::max(worst, best);
-  }
-  return worst;
-}
-
+using sysid::test::match_error;
+using sysid::test::randn;
+using sysid::test::well_conditioned;
 /// Real block-diagonal matrix with the given eigenvalues (pairs as [a b; -b a]).
 MatrixXd block_diagonal(const std::vector<Complex>& upper_half_eigenvalues) {
   Eigen::Index n = 0;
@@ -277,3 +240,5 @@ TEST(CorePolesZeros, StaticAndEmpty) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_core_poles_zeros

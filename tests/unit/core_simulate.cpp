@@ -6,20 +6,16 @@
 #include <Eigen/Dense>
 #include <random>
 #include <stdexcept>
+#include "random_matrices.hpp"
+
+namespace test_unit_core_simulate {
 
 namespace {
 
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
-MatrixXd randn(std::mt19937_64& rng, Eigen::Index r, Eigen::Index c) {
-  std::normal_distribution<double> g;
-  MatrixXd m(r, c);
-  for (Eigen::Index j = 0; j < c; ++j)
-    for (Eigen::Index i = 0; i < r; ++i) m(i, j) = g(rng);
-  return m;
-}
-
+using sysid::test::randn;
 /// Random discrete model with spectral radius `radius` (< 1: stable).
 sysid::StateSpace random_discrete(std::mt19937_64& rng, Eigen::Index n, Eigen::Index m, Eigen::Index l, double radius) {
   MatrixXd A = randn(rng, n, n);
@@ -141,3 +137,5 @@ TEST(CoreSimulate, RejectsViolatedPreconditions) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_core_simulate

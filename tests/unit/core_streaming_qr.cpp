@@ -4,6 +4,8 @@
 
 #include "random_systems.hpp"
 
+namespace test_unit_core_streaming_qr {
+
 using namespace sysid;
 
 TEST(StreamingQR, MatchesQrOfWholeMatrixForAnyChunking) {
@@ -43,3 +45,5 @@ TEST(StreamingQR, RejectsWrongWidth) {
   EXPECT_THROW(qr.add_rows(Eigen::MatrixXd::Zero(2, 4)), std::invalid_argument);
   EXPECT_THROW(StreamingQR(0), std::invalid_argument);
 }
+
+}  // namespace test_unit_core_streaming_qr

@@ -14,6 +14,9 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+#include "random_matrices.hpp"
+
+namespace test_unit_core_transfer_function {
 
 namespace {
 
@@ -22,7 +25,8 @@ using Eigen::VectorXcd;
 using Eigen::VectorXd;
 using Complex = std::complex<double>;
 using LComplex = std::complex<long double>;
-constexpr double kPi = std::numbers::pi;
+using sysid::test::kPi;
+using sysid::test::match_error;
 
 VectorXd vec(std::initializer_list<double> v) {
   VectorXd r(static_cast<Eigen::Index>(v.size()));
@@ -57,27 +61,6 @@ double max_rel_frf_error(const sysid::TransferFunction& tf, const VectorXd& f) {
     const Complex x = tf.Ts > 0 ? std::polar(1.0, w * tf.Ts) : Complex(0.0, w);
     const Complex ref = tf_value(tf, x);
     worst = std::max(worst, std::abs(G[i](0, 0) - ref) / std::abs(ref));
-  }
-  return worst;
-}
-
-/// Greedy nearest matching distance (see core_poles_zeros.cpp).
-double match_error(const VectorXcd& expected, const VectorXcd& computed) {
-  if (expected.size() != computed.size()) return std::numeric_limits<double>::infinity();
-  std::vector<bool> used(static_cast<std::size_t>(computed.size()), false);
-  double worst = 0.0;
-  for (Eigen::Index i = 0; i < expected.size(); ++i) {
-    double best = std::numeric_limits<double>::infinity();
-    std::size_t arg = 0;
-    for (Eigen::Index j = 0; j < computed.size(); ++j) {
-      const double d = std::abs(expected[i] - computed[j]);
-      if (!used[static_cast<std::size_t>(j)] && d < best) {
-        best = d;
-        arg = static_cast<std::size_t>(j);
-      }
-    }
-    used[arg] = true;
-    worst = std::max(worst, best);
   }
   return worst;
 }
@@ -369,3 +352,5 @@ TEST(CoreTransferFunction, ToStateSpacePreconditionsAndLeadingZeros) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_core_transfer_function

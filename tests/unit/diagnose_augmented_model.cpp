@@ -2,6 +2,7 @@
 // each block against an independent construction (exact discretisation of the
 // linear cascade, an RK4 reference for plant forces, hand-worked actuator cases).
 #include <sysid/core/discretize.hpp>
+#include <sysid/core/math_constants.hpp>
 #include <sysid/core/simulate.hpp>
 #include <sysid/diagnose/augmented_model.hpp>
 
@@ -14,6 +15,8 @@
 
 #include "../support/diagnose_cases.hpp"
 
+namespace test_unit_diagnose_augmented_model {
+
 namespace {
 
 using Eigen::MatrixXd;
@@ -22,7 +25,7 @@ using sysid::PhysicsBlock;
 using sysid::StateSpace;
 
 constexpr double kTs = 0.5e-3;
-constexpr double kTwoPi = 2.0 * std::numbers::pi;
+using sysid::kTwoPi;
 
 /// Continuous mass-spring-damper, force in, position out (x1 = position, x2 = velocity).
 StateSpace oscillator(double f_hz, double zeta) {
@@ -218,3 +221,5 @@ TEST(AugmentedModel, RejectsBadBlocks) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_diagnose_augmented_model

@@ -4,6 +4,7 @@
 // parameters, and find nothing when the nominal is right. The independent
 // check against continuous-time plants is tests/acceptance/diagnose_concealed.cpp.
 #include <sysid/core/discretize.hpp>
+#include <sysid/core/math_constants.hpp>
 #include <sysid/core/simulate.hpp>
 #include <sysid/diagnose/diagnose.hpp>
 #include <sysid/validate/fit.hpp>
@@ -16,6 +17,8 @@
 
 #include "../support/diagnose_cases.hpp"
 
+namespace test_unit_diagnose_diagnose {
+
 namespace {
 
 using Eigen::MatrixXd;
@@ -23,7 +26,7 @@ using sysid::PhysicsBlock;
 using sysid::StateSpace;
 
 constexpr double kTs = 0.5e-3;
-constexpr double kTwoPi = 2.0 * std::numbers::pi;
+using sysid::kTwoPi;
 
 StateSpace structure() { return sysid::test::two_mode_structure(kTs); }
 MatrixXd excitation(Eigen::Index n, std::uint64_t seed) { return sysid::test::reversing_excitation(n, kTs, seed); }
@@ -224,3 +227,5 @@ TEST(Diagnose, RejectsTooShortRecords) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_diagnose_diagnose

@@ -19,6 +19,8 @@
 #include <string>
 #include <vector>
 
+namespace test_unit_diagnose_mismatch_location {
+
 namespace {
 
 constexpr double kTs = 0.5e-3;
@@ -411,3 +413,5 @@ TEST(MismatchLocation, ZeroResidualIsNoMismatch) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_diagnose_mismatch_location

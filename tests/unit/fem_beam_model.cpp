@@ -10,6 +10,8 @@
 
 #include "fem_cases.hpp"
 
+namespace test_unit_fem_beam_model {
+
 namespace {
 
 using sysid::fem::BeamOptions;
@@ -110,3 +112,5 @@ TEST(FemBeamModel, RejectsBadGeometryAndNodes) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_fem_beam_model

@@ -10,6 +10,8 @@
 
 #include "fem_cases.hpp"
 
+namespace test_unit_fem_modal_analysis {
+
 namespace {
 
 using sysid::fem::modal_analysis;
@@ -91,3 +93,5 @@ TEST(FemModalAnalysis, RejectsImpossibleRequestsAndMasslessDofs) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_fem_modal_analysis

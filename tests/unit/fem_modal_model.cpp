@@ -10,6 +10,8 @@
 
 #include "fem_cases.hpp"
 
+namespace test_unit_fem_modal_model {
+
 namespace {
 
 using sysid::fem::modal_model;
@@ -130,3 +132,5 @@ TEST(FemModalModel, StaticCorrectionRefusedForAFreeStructure) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_fem_modal_model

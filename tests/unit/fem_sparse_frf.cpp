@@ -9,6 +9,8 @@
 
 #include "fem_cases.hpp"
 
+namespace test_unit_fem_sparse_frf {
+
 namespace {
 
 using sysid::fem::sparse_frf;
@@ -110,3 +112,5 @@ TEST(FemSparseFrf, RejectsNegativeFrequencies) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_fem_sparse_frf

@@ -4,6 +4,8 @@
 
 #include "random_systems.hpp"
 
+namespace test_unit_hankel_block_hankel {
+
 using namespace sysid;
 
 namespace {
@@ -87,3 +89,5 @@ TEST(BlockHankel, TooFewSamplesIsAPreconditionError) {
     EXPECT_NE(std::string(e.what()).find("too few samples"), std::string::npos) << e.what();
   }
 }
+
+}  // namespace test_unit_hankel_block_hankel

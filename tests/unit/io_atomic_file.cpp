@@ -12,6 +12,8 @@
 
 #include "sysid/core/errors.hpp"
 
+namespace test_unit_io_atomic_file {
+
 namespace fs = std::filesystem;
 
 namespace {
@@ -191,3 +193,5 @@ TEST_F(AtomicFile, RefuseToOverwriteInput) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_io_atomic_file

@@ -19,8 +19,11 @@
 #include <string>
 
 #include <sysid/core/errors.hpp>
+#include <sysid/core/math_constants.hpp>
 
 #include "../support/diagnose_cases.hpp"
+
+namespace test_unit_io_augmented_model_file {
 
 namespace {
 
@@ -32,7 +35,7 @@ using sysid::PhysicsBlock;
 using sysid::StateSpace;
 
 constexpr double kTs = 1e-3;
-constexpr double kTwoPi = 2.0 * std::numbers::pi;
+using sysid::kTwoPi;
 
 /// Discrete real-modal model, one 2x2 rotation block r R(th) per mode with
 /// z = exp(s Ts): poles exactly at (freq, damping), so a continuous equivalent
@@ -348,3 +351,5 @@ TEST(AugmentedModelFile, ReportHasTheDesignKeysAndUnits) {
   // tolerance and a unit mistake (110 or 0.1) cannot pass.
   EXPECT_NEAR(first["params"]["ratio"].get<double>(), 1.1, 0.022);
 }
+
+}  // namespace test_unit_io_augmented_model_file

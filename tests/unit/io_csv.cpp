@@ -14,6 +14,8 @@
 
 #include "sysid/core/errors.hpp"
 
+namespace test_unit_io_csv {
+
 namespace fs = std::filesystem;
 using sysid::CsvTable;
 using sysid::DataError;
@@ -502,3 +504,5 @@ TEST(IoCsv, FormatCsvPreconditions) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_io_csv

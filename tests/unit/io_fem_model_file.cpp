@@ -21,6 +21,8 @@
 #include "sysid/core/errors.hpp"
 #include "sysid/io/matrix_market.hpp"
 
+namespace test_unit_io_fem_model_file {
+
 namespace fs = std::filesystem;
 using nlohmann::json;
 using sysid::DataError;
@@ -363,3 +365,5 @@ TEST(FemModelFile, WriteRefusesAnInvalidModel) {
   EXPECT_FALSE(fs::exists(dir.path() / "x.json"));
   EXPECT_FALSE(fs::exists(dir.path() / "x.M.mtx"));
 }
+
+}  // namespace test_unit_io_fem_model_file

@@ -20,6 +20,8 @@
 
 #include "sysid/core/errors.hpp"
 
+namespace test_unit_io_matrix_market {
+
 namespace fs = std::filesystem;
 using sysid::DataError;
 using Sparse = Eigen::SparseMatrix<double>;
@@ -320,3 +322,5 @@ TEST(MatrixMarketErrors, UnreadableFile) {
     EXPECT_EQ(e.file(), missing);
   }
 }
+
+}  // namespace test_unit_io_matrix_market

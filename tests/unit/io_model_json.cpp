@@ -13,6 +13,8 @@
 
 #include "sysid/core/errors.hpp"
 
+namespace test_unit_io_model_json {
+
 namespace fs = std::filesystem;
 using nlohmann::json;
 using sysid::DataError;
@@ -376,3 +378,5 @@ TEST(IoModelJson, WritingRefusesNonFiniteAndBadShapes) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_io_model_json

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+namespace test_unit_io_polynomial_model_file {
+
 namespace {
 
 /// One output of a SISO polynomial model with the given polynomial lengths.
@@ -53,3 +55,5 @@ TEST(PolynomialModelFile, StateSpaceFilesHaveNoCountAndBrokenListsAreDataErrors)
 }
 
 }  // namespace
+
+}  // namespace test_unit_io_polynomial_model_file

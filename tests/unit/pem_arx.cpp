@@ -9,6 +9,8 @@
 
 #include "random_systems.hpp"
 
+namespace test_unit_pem_arx {
+
 using namespace sysid;
 
 namespace {
@@ -135,3 +137,5 @@ TEST(Arx, BadOrdersAreRejected) {
   EXPECT_THROW(arx(data, {.na = 60, .nb = {60}, .nk = {}}), std::invalid_argument);  // more parameters than equations
   EXPECT_THROW(ar(data, {.na = 0}), std::invalid_argument);
 }
+
+}  // namespace test_unit_pem_arx

@@ -11,6 +11,8 @@
 #include <random>
 #include <set>
 
+namespace test_unit_pem_order_search {
+
 using namespace sysid;
 
 namespace {
@@ -113,3 +115,5 @@ TEST(OrderSearch, BadRequestsAreRejected) {
   o.max_combinations = 2;
   EXPECT_THROW(search_polynomial_orders(ar4_data(2), nullptr, grid, o), std::invalid_argument);
 }
+
+}  // namespace test_unit_pem_order_search

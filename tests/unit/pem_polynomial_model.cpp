@@ -10,6 +10,8 @@
 #include <complex>
 #include <numbers>
 
+namespace test_unit_pem_polynomial_model {
+
 using namespace sysid;
 
 namespace {
@@ -106,3 +108,5 @@ TEST(PolynomialModel, InvalidModelsAreRejected) {
   pm.nk = {-1, 0};
   EXPECT_THROW(to_innovation_state_space(pm), std::invalid_argument);
 }
+
+}  // namespace test_unit_pem_polynomial_model

@@ -9,6 +9,8 @@
 
 #include "random_systems.hpp"
 
+namespace test_unit_pem_prediction_error {
+
 using namespace sysid;
 
 namespace {
@@ -171,3 +173,5 @@ TEST(PredictionError, BadOrdersAreRejected) {
   opt.nb = {150};
   EXPECT_THROW(pem(data, opt), std::invalid_argument);  // more parameters than the data support
 }
+
+}  // namespace test_unit_pem_prediction_error

@@ -19,6 +19,8 @@
 #include <string>
 #include <vector>
 
+namespace test_unit_realization_era {
+
 namespace {
 
 using Eigen::MatrixXd;
@@ -258,3 +260,5 @@ TEST(RealizationEra, BadOptionsThrow) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_realization_era

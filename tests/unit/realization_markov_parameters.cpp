@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+namespace test_unit_realization_markov_parameters {
+
 namespace {
 
 using Eigen::MatrixXd;
@@ -237,3 +239,5 @@ TEST(RealizationMarkovParameters, DeconvolutionWarnsAndThrows) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_realization_markov_parameters

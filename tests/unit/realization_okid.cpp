@@ -17,6 +17,8 @@
 #include <string>
 #include <vector>
 
+namespace test_unit_realization_okid {
+
 namespace {
 
 using Eigen::MatrixXd;
@@ -219,3 +221,5 @@ TEST(RealizationOkid, BadOptionsThrow) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_realization_okid

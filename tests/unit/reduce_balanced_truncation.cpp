@@ -10,11 +10,14 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include "random_matrices.hpp"
+
+namespace test_unit_reduce_balanced_truncation {
 
 namespace {
 
 using Eigen::MatrixXd;
-constexpr double kPi = std::numbers::pi;
+using sysid::test::kPi;
 
 MatrixXd random_matrix(int r, int c, std::mt19937_64& rng) {
   std::normal_distribution<double> g;
@@ -210,3 +213,5 @@ TEST(ReduceBalancedTruncation, NonMinimalModelOrderCapped) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_reduce_balanced_truncation

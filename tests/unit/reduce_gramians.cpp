@@ -9,6 +9,8 @@
 #include <numbers>
 #include <random>
 
+namespace test_unit_reduce_gramians {
+
 namespace {
 
 using Eigen::MatrixXd;
@@ -118,3 +120,5 @@ TEST(ReduceGramians, UnstableOrBadShapesThrow) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_reduce_gramians

@@ -9,6 +9,8 @@
 #include <cmath>
 #include <random>
 
+namespace test_unit_reduce_hankel_singular_values {
+
 namespace {
 
 using Eigen::MatrixXd;
@@ -156,3 +158,5 @@ TEST(ReduceHankelSingularValues, ContinuousWithIntegratorAndStaticModel) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_reduce_hankel_singular_values

@@ -11,12 +11,15 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include "random_matrices.hpp"
+
+namespace test_unit_reduce_modal_truncation {
 
 namespace {
 
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
-constexpr double kPi = std::numbers::pi;
+using sysid::test::kPi;
 
 /// Observer canonical form of N(q)/A(q) (A monic, degree n; N of degree < n, strictly
 /// proper): the state-space form a polynomial (AR/ARX) model is converted to.
@@ -162,3 +165,5 @@ TEST(ReduceModalTruncation, DefectiveMatrixAndBadBandThrow) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_reduce_modal_truncation

@@ -12,12 +12,15 @@
 #include <limits>
 #include <numbers>
 #include <vector>
+#include "random_matrices.hpp"
+
+namespace test_unit_signal_butterworth {
 
 namespace {
 
 using C = std::complex<double>;
 using sysid::BandType;
-constexpr double kPi = std::numbers::pi;
+using sysid::test::kPi;
 
 // Roots of every section denominator a0 z^2 + a1 z + a2 (one root for a first-order section).
 std::vector<C> section_poles(const sysid::SecondOrderSections& f) {
@@ -251,3 +254,5 @@ TEST(SignalButterworth, PreconditionsNameTheInequality) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_signal_butterworth

@@ -5,6 +5,8 @@
 
 #include <random>
 
+namespace test_unit_signal_detrend {
+
 using namespace sysid;
 
 namespace {
@@ -76,3 +78,5 @@ TEST(SignalDetrend, Preconditions) {
   EXPECT_EQ(parse_trend_type("constant"), TrendType::constant);
   EXPECT_THROW(parse_trend_type("quadratic"), std::invalid_argument);
 }
+
+}  // namespace test_unit_signal_detrend

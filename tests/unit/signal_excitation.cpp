@@ -12,11 +12,13 @@
 #include <set>
 #include <string>
 #include <vector>
+#include "random_matrices.hpp"
+
+namespace test_unit_signal_excitation {
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-
+using sysid::test::kPi;
 template <class Fn>
 std::string error_of(Fn fn) {
   try {
@@ -384,3 +386,5 @@ TEST(SignalExcitation, PrbsPreconditions) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_signal_excitation

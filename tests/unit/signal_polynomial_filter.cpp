@@ -8,6 +8,8 @@
 
 #include "random_systems.hpp"
 
+namespace test_unit_signal_polynomial_filter {
+
 using namespace sysid;
 
 TEST(PolynomialFilter, MatchesTheDifferenceEquation) {
@@ -39,3 +41,5 @@ TEST(PolynomialFilter, RejectsANonMonicDenominator) {
                std::invalid_argument);
   EXPECT_THROW(filter_polynomial(Eigen::VectorXd(), Eigen::VectorXd::Ones(1), Eigen::VectorXd::Ones(5)), std::invalid_argument);
 }
+
+}  // namespace test_unit_signal_polynomial_filter

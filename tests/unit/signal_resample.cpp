@@ -7,13 +7,15 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include "random_matrices.hpp"
+
+namespace test_unit_signal_resample {
 
 using namespace sysid;
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-
+using sysid::test::kPi;
 /// sin(2 pi f t + phi) at t = k / fs, k = 0..n-1 (f and fs in the same unit).
 Eigen::VectorXd tone(Eigen::Index n, double f, double fs, double phi = 0.3) {
   Eigen::VectorXd x(n);
@@ -158,3 +160,5 @@ TEST(SignalResample, Preconditions) {
   EXPECT_THROW(resample_poly(bad, 2, 1), std::invalid_argument);
   EXPECT_THROW(resample_poly(x, 2, 1, {.cutoff_fraction = 0.0}), std::invalid_argument);
 }
+
+}  // namespace test_unit_signal_resample

@@ -11,11 +11,14 @@
 #include <numbers>
 #include <random>
 #include <vector>
+#include "random_matrices.hpp"
+
+namespace test_unit_signal_sos_filter {
 
 namespace {
 
 using sysid::BandType;
-constexpr double kPi = std::numbers::pi;
+using sysid::test::kPi;
 
 Eigen::MatrixXd gaussian(Eigen::Index n, Eigen::Index m, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
@@ -203,3 +206,5 @@ TEST(SignalSosFilter, PadlengthPrecondition) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_signal_sos_filter

@@ -14,6 +14,8 @@
 #include <random>
 #include <vector>
 
+namespace test_unit_spectral_frf {
+
 namespace {
 
 constexpr double kFs = 1000.0;
@@ -392,3 +394,5 @@ TEST(SpectralFrf, BadArgumentsThrow) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_spectral_frf

@@ -13,13 +13,16 @@
 #include <complex>
 #include <numbers>
 #include <random>
+#include "random_matrices.hpp"
+
+namespace test_unit_spectral_model_spectrum {
 
 using namespace sysid;
 
 namespace {
 
 using cd = std::complex<double>;
-constexpr double kPi = std::numbers::pi;
+using sysid::test::kPi;
 
 /// AR(1) y(t) = a y(t-1) + e(t) in innovation form: x = y(t-1) ... x+ = a x + a e, y = x + e.
 StateSpace ar1(double a, double ts) {
@@ -167,3 +170,5 @@ TEST(ModelSpectrum, RefusesWhatHasNoSpectrum) {
   EXPECT_THROW(model_output_spectrum(ar1(0.5, 0.01), one, -one, f), std::invalid_argument);
   EXPECT_THROW(model_output_spectrum(ar1(0.5, 0.01), one, one, Eigen::VectorXd::Constant(1, 60.0)), std::invalid_argument);
 }
+
+}  // namespace test_unit_spectral_model_spectrum

@@ -12,6 +12,8 @@
 #include <numbers>
 #include <random>
 
+namespace test_unit_spectral_welch {
+
 namespace {
 
 using sysid::Detrend;
@@ -251,3 +253,5 @@ TEST(SpectralWelch, BadArgumentsThrow) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_spectral_welch

@@ -7,6 +7,8 @@
 
 #include "random_systems.hpp"
 
+namespace test_unit_subspace_innovation_model {
+
 using namespace sysid;
 
 namespace {
@@ -65,7 +67,9 @@ TEST(InnovationModel, ColouredResidualsAreNotCalledWhite) {
   const InnovationModelResult r = innovation_model(Eigen::MatrixXd::Constant(1, 1, 0.5), Eigen::MatrixXd::Ones(1, 1), {v});
   // A first-order model with pole 0.5 cannot reproduce an MA(1); whatever the
   // outcome, a converged gain must not be the white-residual K = 0.
-  if (r.status == InnovationModelResult::Status::converged) EXPECT_GT(r.K.norm(), 0.1) << r.message;
+  if (r.status == InnovationModelResult::Status::converged) {
+    EXPECT_GT(r.K.norm(), 0.1) << r.message;
+  }
 }
 
 TEST(InnovationModel, RejectsInconsistentArguments) {
@@ -75,3 +79,5 @@ TEST(InnovationModel, RejectsInconsistentArguments) {
   EXPECT_THROW(innovation_model(A, C, {Eigen::MatrixXd::Ones(5, 1)}), std::invalid_argument);  // fewer rows than lags
   EXPECT_THROW(innovation_model(A, C, {Eigen::MatrixXd::Ones(100, 2)}), std::invalid_argument);
 }
+
+}  // namespace test_unit_subspace_innovation_model

@@ -12,6 +12,8 @@
 
 #include "random_systems.hpp"
 
+namespace test_unit_subspace_n4sid {
+
 using namespace sysid;
 
 namespace {
@@ -306,3 +308,5 @@ TEST(N4sid, BandLimitedModelFollowsTheFilterAboveTheBand) {
     EXPECT_LT(std::abs(g1[k](0, 0) - expected), 0.03 * std::max(std::abs(g0[k](0, 0)), 0.1)) << "f = " << f(static_cast<Eigen::Index>(k));
   }
 }
+
+}  // namespace test_unit_subspace_n4sid

@@ -5,6 +5,8 @@
 
 #include "random_systems.hpp"
 
+namespace test_unit_subspace_order_sweep {
+
 using namespace sysid;
 
 namespace {
@@ -76,3 +78,5 @@ TEST(OrderSweep, Preconditions) {
   const IoData d2 = noisy_data(two_out, 500, 6, 0.01);
   EXPECT_THROW(n4sid_order_sweep(d, d2, {}, 1, 2), std::invalid_argument);
 }
+
+}  // namespace test_unit_subspace_order_sweep

@@ -9,6 +9,8 @@
 
 #include "random_systems.hpp"
 
+namespace test_unit_validate_compare {
+
 using namespace sysid;
 
 namespace {
@@ -223,3 +225,5 @@ TEST(Compare, Preconditions) {
   EXPECT_THROW(predict_k_step(sys, Eigen::MatrixXd::Zero(2, 1), e.u, e.y, 0, Eigen::VectorXd()), std::invalid_argument);
   EXPECT_THROW(estimate_initial_state(sys, e.u, e.y, 0), std::invalid_argument);
 }
+
+}  // namespace test_unit_validate_compare

@@ -10,6 +10,8 @@
 #include <numbers>
 #include <random>
 
+namespace test_unit_validate_data_check {
+
 namespace {
 
 using Eigen::MatrixXd;
@@ -154,3 +156,5 @@ TEST(DataCheck, TooShortARecordIsRefused) {
 }
 
 }  // namespace
+
+}  // namespace test_unit_validate_data_check

@@ -9,6 +9,8 @@
 #include <numbers>
 #include <random>
 
+namespace test_unit_validate_frequency_compare {
+
 using namespace sysid;
 
 namespace {
@@ -134,3 +136,5 @@ TEST(ValidateFrequencyCompare, BandLimitsAndPreconditions) {
   EXPECT_THROW(frequency_compare(other_rate, data, band(0.0, 100.0)), std::invalid_argument);
   EXPECT_THROW(frequency_compare(mimo_plant(), data, band(0.0, 100.0)), std::invalid_argument);
 }
+
+}  // namespace test_unit_validate_frequency_compare

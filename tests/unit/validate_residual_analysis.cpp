@@ -14,6 +14,8 @@
 
 #include "random_systems.hpp"
 
+namespace test_unit_validate_residual_analysis {
+
 using namespace sysid;
 
 namespace {
@@ -387,3 +389,5 @@ TEST(ResidualAnalysis, ConstantSignalsAreWarnedNotNaN) {
   ASSERT_FALSE(off.warnings.empty());
   EXPECT_NE(off.warnings.front().find("offset"), std::string::npos) << off.warnings.front();
 }
+
+}  // namespace test_unit_validate_residual_analysis
