@@ -1,10 +1,10 @@
 // End-to-end: sysid compare (simulation and k-step prediction fit).
-#include <sysid/core/discrete_riccati.hpp>
 #include <sysid/core/simulate.hpp>
 #include <sysid/validate/compare.hpp>
 
 #include <gtest/gtest.h>
 
+#include "innovation_log.hpp"
 #include "run_cli.hpp"
 
 namespace test_app_compare {
@@ -12,46 +12,12 @@ namespace test_app_compare {
 using namespace sysid;
 using namespace sysid::test;
 
-namespace {
-
-struct InnovationLog {
-  Eigen::MatrixXd K, u, y;
-};
-
-/// Data from the innovation model of the 4th-order plant: x+ = A x + B u + K e,
-/// y = C x + e, with K the steady-state Kalman gain for process noise q I and
-/// unit measurement noise; e white with standard deviation sigma.
-InnovationLog innovation_log(const StateSpace& plant, Eigen::Index N, double q, double sigma, std::uint64_t seed) {
-  const Eigen::Index n = plant.order();
-  const KalmanFilterResult kf = steady_state_kalman_filter(plant.A, plant.C, q * Eigen::MatrixXd::Identity(n, n),
-                                                           Eigen::MatrixXd::Identity(1, 1), Eigen::MatrixXd::Zero(n, 1));
-  EXPECT_EQ(kf.status, KalmanFilterResult::Status::converged);
-  InnovationLog d;
-  d.K = kf.K;
-  d.u = gaussian(N, 1, seed, 1.0);
-  const Eigen::MatrixXd e = gaussian(N, 1, seed + 1, sigma);
-  Eigen::MatrixXd Bx(n, 2), Dx(1, 2), ue(N, 2);
-  Bx << plant.B, d.K;
-  Dx << plant.D, 1.0;
-  ue << d.u, e;
-  d.y = simulate(StateSpace(plant.A, Bx, plant.C, Dx, plant.Ts), ue);
-  return d;
-}
-
-void write_log(const std::string& path, const Eigen::MatrixXd& u, const Eigen::MatrixXd& y) {
-  Eigen::MatrixXd table(u.rows(), 3);
-  table << Eigen::VectorXd::LinSpaced(u.rows(), 0.0, static_cast<double>(u.rows() - 1)) * 0.001, u, y;
-  write_csv(path, {"t", "u", "y"}, table);
-}
-
-}  // namespace
-
 TEST(CompareApp, OneStepPredictionBeatsSimulationOnNoisyInnovationData) {
   TempDir dir;
   const StateSpace plant = four_mode_plant();
   const InnovationLog d = innovation_log(plant, 4000, 0.05, 2.0, 3);
   write_model(dir / "m.json", plant, d.K);
-  write_log(dir / "log.csv", d.u, d.y);
+  write_siso_log(dir / "log.csv", d.u, d.y);
 
   const CliResult sim = run_cli({"compare", dir / "m.json", dir / "log.csv"});
   ASSERT_EQ(sim.exit_code, 0) << describe(sim);
@@ -83,7 +49,7 @@ TEST(CompareApp, PredictWithoutKalmanGainIsAnError) {
   const StateSpace plant = four_mode_plant();
   write_model(dir / "m.json", plant);  // no K
   const Eigen::MatrixXd u = gaussian(500, 1, 1, 1.0);
-  write_log(dir / "log.csv", u, simulate(plant, u));
+  write_siso_log(dir / "log.csv", u, simulate(plant, u));
   const CliResult r = run_cli({"compare", dir / "m.json", dir / "log.csv", "--predict", "1"});
   EXPECT_EQ(r.exit_code, 2) << describe(r);
   EXPECT_NE(r.err.find("Kalman gain"), std::string::npos) << r.err;
@@ -99,7 +65,7 @@ TEST(CompareApp, ExactDataWithOffsetsAndInitialState) {
   write_model(dir / "m.json", plant, {}, in_off, out_off, x0);
   const Eigen::MatrixXd u = gaussian(2000, 1, 4, 1.0);
   const Eigen::MatrixXd y = (simulate(plant, u, x0).array() + 7.0).matrix();
-  write_log(dir / "log.csv", (u.array() + 1.25).matrix(), y);
+  write_siso_log(dir / "log.csv", (u.array() + 1.25).matrix(), y);
 
   for (const std::string x0_mode : {"estimate", "model"}) {
     const CliResult r = run_cli({"compare", dir / "m.json", dir / "log.csv", "--x0", x0_mode});
@@ -116,7 +82,7 @@ TEST(CompareApp, ChannelCountMustMatchTheModel) {
   const StateSpace plant = four_mode_plant();
   write_model(dir / "m.json", plant);
   const Eigen::MatrixXd u = gaussian(300, 1, 1, 1.0);
-  write_log(dir / "log.csv", u, simulate(plant, u));
+  write_siso_log(dir / "log.csv", u, simulate(plant, u));
   const CliResult r = run_cli({"compare", dir / "m.json", dir / "log.csv", "--outputs", "y,u"});
   EXPECT_EQ(r.exit_code, 2) << describe(r);
   EXPECT_NE(r.err.find("1 output(s)"), std::string::npos) << r.err;

@@ -1,5 +1,4 @@
 // End-to-end: sysid resid (residual whiteness and independence, Ljung-Box, CSV of correlations).
-#include <sysid/core/discrete_riccati.hpp>
 #include <sysid/core/simulate.hpp>
 #include <sysid/validate/residual_analysis.hpp>
 
@@ -7,6 +6,7 @@
 
 #include <filesystem>
 
+#include "innovation_log.hpp"
 #include "run_cli.hpp"
 
 namespace test_app_resid {
@@ -15,36 +15,6 @@ using namespace sysid;
 using namespace sysid::test;
 
 namespace {
-
-struct InnovationLog {
-  Eigen::MatrixXd K, u, y;
-};
-
-/// Data from the innovation model of `plant`: x+ = A x + B u + K e, y = C x + D u + e,
-/// K the steady-state Kalman gain for process noise q I and unit measurement
-/// noise, e white with standard deviation sigma, u white with unit variance.
-InnovationLog innovation_log(const StateSpace& plant, Eigen::Index N, double q, double sigma, std::uint64_t seed) {
-  const Eigen::Index n = plant.order();
-  const KalmanFilterResult kf = steady_state_kalman_filter(plant.A, plant.C, q * Eigen::MatrixXd::Identity(n, n),
-                                                           Eigen::MatrixXd::Identity(1, 1), Eigen::MatrixXd::Zero(n, 1));
-  EXPECT_EQ(kf.status, KalmanFilterResult::Status::converged);
-  InnovationLog d;
-  d.K = kf.K;
-  d.u = gaussian(N, 1, seed, 1.0);
-  const Eigen::MatrixXd e = gaussian(N, 1, seed + 1, sigma);
-  Eigen::MatrixXd Bx(n, 2), Dx(1, 2), ue(N, 2);
-  Bx << plant.B, d.K;
-  Dx << plant.D, 1.0;
-  ue << d.u, e;
-  d.y = simulate(StateSpace(plant.A, Bx, plant.C, Dx, plant.Ts), ue);
-  return d;
-}
-
-void write_log(const std::string& path, const Eigen::MatrixXd& u, const Eigen::MatrixXd& y) {
-  Eigen::MatrixXd table(u.rows(), 3);
-  table << Eigen::VectorXd::LinSpaced(u.rows(), 0.0, static_cast<double>(u.rows() - 1)) * 0.001, u, y;
-  write_csv(path, {"t", "u", "y"}, table);
-}
 
 /// The text after "<label>" up to the end of its line.
 std::string line_after(const std::string& text, const std::string& label) {
@@ -61,7 +31,7 @@ struct LogAndTrueModel {
   InnovationLog d;
   LogAndTrueModel() : d(innovation_log(plant, 4000, 0.05, 2.0, 3)) {
     write_model(dir / "true.json", plant, d.K);
-    write_log(dir / "log.csv", d.u, d.y);
+    write_siso_log(dir / "log.csv", d.u, d.y);
   }
 };
 

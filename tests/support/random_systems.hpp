@@ -5,8 +5,11 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <complex>
+#include <cstdint>
 #include <numbers>
 #include <random>
+#include <vector>
 
 namespace sysid::test {
 
@@ -46,6 +49,34 @@ inline Eigen::MatrixXd white_noise(Eigen::Index n, Eigen::Index cols, std::uint6
   for (Eigen::Index c = 0; c < cols; ++c)
     for (Eigen::Index r = 0; r < n; ++r) x(r, c) = g(rng);
   return x;
+}
+
+/// Discrete modal system with sample time Ts: one 2x2 real block per mode with
+/// poles exp(s Ts), s = 2 pi f (-zeta +/- j sqrt(1 - zeta^2)) (f in Hz; with Ts = 1,
+/// in cycles per sample), B, C, D uniform in [-1, 1], then a random similarity
+/// T = U + 2 I (U uniform in [-1, 1]) so A is not block-diagonal.
+inline StateSpace rotated_modal_system(const std::vector<double>& f, const std::vector<double>& zeta, int m, int l,
+                                       std::uint64_t seed, double Ts = 1.0) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const int n = 2 * static_cast<int>(f.size());
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n);
+  for (std::size_t k = 0; k < f.size(); ++k) {
+    const std::complex<double> z =
+        std::exp(2.0 * std::numbers::pi * f[k] * Ts * std::complex<double>(-zeta[k], std::sqrt(1.0 - zeta[k] * zeta[k])));
+    const int i = 2 * static_cast<int>(k);
+    A(i, i) = z.real();
+    A(i, i + 1) = z.imag();
+    A(i + 1, i) = -z.imag();
+    A(i + 1, i + 1) = z.real();
+  }
+  Eigen::MatrixXd B(n, m), C(l, n), D(l, m), T(n, n);
+  for (Eigen::MatrixXd* M : {&B, &C, &D, &T})
+    for (Eigen::Index r = 0; r < M->rows(); ++r)
+      for (Eigen::Index c = 0; c < M->cols(); ++c) (*M)(r, c) = unit(rng);
+  T.diagonal().array() += 2.0;
+  const Eigen::MatrixXd Ti = T.inverse();
+  return StateSpace(T * A * Ti, T * B, C * Ti, D, Ts);
 }
 
 }  // namespace sysid::test

@@ -18,40 +18,16 @@
 #include <random>
 #include <string>
 #include <vector>
+#include "checks.hpp"
+#include "random_systems.hpp"
 
 namespace test_unit_realization_era {
 
 namespace {
 
 using Eigen::MatrixXd;
-
-/// Discrete modal system (Ts = 1): one 2x2 real block per mode with poles
-/// exp(s Ts), s = 2 pi f (-zeta +/- j sqrt(1 - zeta^2)), f in cycles/sample,
-/// random B, C, D, then a random similarity so A is not block-diagonal.
-sysid::StateSpace modal_system(const std::vector<double>& f, const std::vector<double>& zeta, int m, int l,
-                               std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  const int n = 2 * static_cast<int>(f.size());
-  MatrixXd A = MatrixXd::Zero(n, n);
-  for (std::size_t k = 0; k < f.size(); ++k) {
-    const std::complex<double> s =
-        2.0 * std::numbers::pi * f[k] * std::complex<double>(-zeta[k], std::sqrt(1.0 - zeta[k] * zeta[k]));
-    const std::complex<double> z = std::exp(s);
-    const int i = 2 * static_cast<int>(k);
-    A(i, i) = z.real();
-    A(i, i + 1) = z.imag();
-    A(i + 1, i) = -z.imag();
-    A(i + 1, i + 1) = z.real();
-  }
-  MatrixXd B(n, m), C(l, n), D(l, m), T(n, n);
-  for (MatrixXd* M : {&B, &C, &D, &T})
-    for (Eigen::Index r = 0; r < M->rows(); ++r)
-      for (Eigen::Index c = 0; c < M->cols(); ++c) (*M)(r, c) = unit(rng);
-  T.diagonal().array() += 2.0;
-  const MatrixXd Ti = T.inverse();
-  return sysid::StateSpace(T * A * Ti, T * B, C * Ti, D, 1.0);
-}
+using sysid::test::has_warning;
+using sysid::test::rotated_modal_system;
 
 /// Largest distance from a true pole to its nearest estimated pole (and back).
 double pole_distance(const Eigen::VectorXcd& a, const Eigen::VectorXcd& b) {
@@ -75,17 +51,11 @@ double frf_error(const sysid::StateSpace& est, const sysid::StateSpace& ref) {
   return err / peak;
 }
 
-bool has_warning(const std::vector<std::string>& w, const std::string& text) {
-  for (const std::string& s : w)
-    if (s.find(text) != std::string::npos) return true;
-  return false;
-}
-
 TEST(RealizationEra, ExactMarkovParametersGivePolesToRoundingLevel) {
   // 6th-order, lightly damped (zeta 0.5-2 %), 3 outputs x 2 inputs. Exact
   // Markov parameters give a rank-6 H(0); ERA is then exact up to rounding in
   // the SVD and the eigenvalues: ~ eps cond(eigenvector matrix) ||A||, far below 1e-8.
-  const sysid::StateSpace sys = modal_system({0.04, 0.11, 0.27}, {0.005, 0.01, 0.02}, 2, 3, 1);
+  const sysid::StateSpace sys = rotated_modal_system({0.04, 0.11, 0.27}, {0.005, 0.01, 0.02}, 2, 3, 1);
   const sysid::MarkovParameters mp = sysid::markov_parameters(sys, 60);
   struct Case {
     sysid::EraOptions o;
@@ -130,7 +100,7 @@ TEST(RealizationEra, ExactMarkovParametersGivePolesToRoundingLevel) {
 TEST(RealizationEra, StackedSingleInputExperimentsEqualTheMimoRealisation) {
   // Two SIMO "experiments" (one input each) stacked column-wise must realise
   // the 2-input system: same frequency response, inputs in experiment order.
-  const sysid::StateSpace sys = modal_system({0.06, 0.19, 0.33}, {0.01, 0.02, 0.015}, 2, 3, 2);
+  const sysid::StateSpace sys = rotated_modal_system({0.06, 0.19, 0.33}, {0.01, 0.02, 0.015}, 2, 3, 2);
   std::vector<sysid::MarkovParameters> parts;
   for (int j = 0; j < 2; ++j) {
     sysid::StateSpace sj(sys.A, sys.B.col(j), sys.C, sys.D.col(j), 1.0);
@@ -158,7 +128,7 @@ TEST(RealizationEra, PolesFromMultiStepNlmsEstimatesWithinOnePercent) {
   // white excitation of one actuator at a time, 30 dB SNR on every output.
   // The LMS misalignment is then ~-35 dB, i.e. ~2 % RMS error on the Markov
   // parameters, and ERA's frequency error is far below 1 % (measured ~1e-4).
-  const sysid::StateSpace sys = modal_system({0.08, 0.17, 0.31}, {0.05, 0.04, 0.03}, 2, 3, 7);
+  const sysid::StateSpace sys = rotated_modal_system({0.08, 0.17, 0.31}, {0.05, 0.04, 0.03}, 2, 3, 7);
   std::mt19937_64 rng(3);
   std::normal_distribution<double> g(0.0, 1.0);
   std::vector<sysid::MarkovParameters> parts;
@@ -199,7 +169,7 @@ TEST(RealizationEra, PolesFromMultiStepNlmsEstimatesWithinOnePercent) {
 TEST(RealizationEra, WarnsAboutUnstablePolesAndWeakOrderDecision) {
   // Exact Markov parameters of a slightly unstable system: ERA realises it
   // faithfully and says so.
-  sysid::StateSpace sys = modal_system({0.1, 0.2}, {0.01, 0.02}, 1, 2, 5);
+  sysid::StateSpace sys = rotated_modal_system({0.1, 0.2}, {0.01, 0.02}, 1, 2, 5);
   sys.A *= 1.02 / sysid::poles(sys).cwiseAbs().maxCoeff();
   sysid::EraOptions o;
   o.order = 4;
@@ -208,7 +178,7 @@ TEST(RealizationEra, WarnsAboutUnstablePolesAndWeakOrderDecision) {
   EXPECT_TRUE(has_warning(r.warnings, "unstable pole"));
   // Fixed order far above the true one, Markov parameters with a noise floor:
   // sigma_8 and sigma_9 both belong to the noise, a weak order decision.
-  sysid::MarkovParameters noisy = sysid::markov_parameters(modal_system({0.1, 0.2}, {0.05, 0.05}, 1, 2, 6), 30);
+  sysid::MarkovParameters noisy = sysid::markov_parameters(rotated_modal_system({0.1, 0.2}, {0.05, 0.05}, 1, 2, 6), 30);
   std::mt19937_64 rng(4);
   std::normal_distribution<double> g(0.0, 1e-3);
   for (MatrixXd& h : noisy.h)
@@ -219,7 +189,7 @@ TEST(RealizationEra, WarnsAboutUnstablePolesAndWeakOrderDecision) {
 }
 
 TEST(RealizationEra, BadOptionsThrow) {
-  const sysid::StateSpace sys = modal_system({0.1, 0.2}, {0.05, 0.05}, 2, 2, 8);
+  const sysid::StateSpace sys = rotated_modal_system({0.1, 0.2}, {0.05, 0.05}, 2, 2, 8);
   const sysid::MarkovParameters mp = sysid::markov_parameters(sys, 10);
   auto expect_throw = [&](const sysid::EraOptions& o, const std::string& text) {
     try {
@@ -248,7 +218,7 @@ TEST(RealizationEra, BadOptionsThrow) {
   sysid::MarkovParameters short_mp = mp;
   short_mp.h.resize(2);
   EXPECT_THROW(sysid::era(short_mp), std::invalid_argument);
-  sysid::MarkovParameters other = sysid::markov_parameters(modal_system({0.1}, {0.05}, 1, 3, 9), 10);
+  sysid::MarkovParameters other = sysid::markov_parameters(rotated_modal_system({0.1}, {0.05}, 1, 3, 9), 10);
   EXPECT_THROW(sysid::era(std::vector<sysid::MarkovParameters>{mp, other}), std::invalid_argument);  // 2 vs 3 outputs
   sysid::MarkovParameters slow = mp;
   slow.Ts = 2.0;

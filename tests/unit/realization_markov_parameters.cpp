@@ -14,6 +14,8 @@
 #include <random>
 #include <string>
 #include <vector>
+#include "checks.hpp"
+#include "random_systems.hpp"
 
 namespace test_unit_realization_markov_parameters {
 
@@ -23,46 +25,9 @@ using Eigen::MatrixXd;
 
 constexpr double kTs = 0.001;  // 1 kHz sampling
 
-/// Discrete modal system, Ts = 1 ms, modes at f (Hz) with damping ratios zeta,
-/// random B, C, D and a random similarity (A not block-diagonal).
-sysid::StateSpace modal_system(const std::vector<double>& f, const std::vector<double>& zeta, int m, int l,
-                               std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  const int n = 2 * static_cast<int>(f.size());
-  MatrixXd A = MatrixXd::Zero(n, n);
-  for (std::size_t k = 0; k < f.size(); ++k) {
-    const std::complex<double> z =
-        std::exp(2.0 * std::numbers::pi * f[k] * kTs * std::complex<double>(-zeta[k], std::sqrt(1.0 - zeta[k] * zeta[k])));
-    const int i = 2 * static_cast<int>(k);
-    A(i, i) = z.real();
-    A(i, i + 1) = z.imag();
-    A(i + 1, i) = -z.imag();
-    A(i + 1, i + 1) = z.real();
-  }
-  MatrixXd B(n, m), C(l, n), D(l, m), T(n, n);
-  for (MatrixXd* M : {&B, &C, &D, &T})
-    for (Eigen::Index r = 0; r < M->rows(); ++r)
-      for (Eigen::Index c = 0; c < M->cols(); ++c) (*M)(r, c) = unit(rng);
-  T.diagonal().array() += 2.0;
-  const MatrixXd Ti = T.inverse();
-  return sysid::StateSpace(T * A * Ti, T * B, C * Ti, D, kTs);
-}
-
-double relative_error(const std::vector<MatrixXd>& a, const std::vector<MatrixXd>& b, std::size_t count) {
-  double num = 0.0, den = 0.0;
-  for (std::size_t k = 0; k < count; ++k) {
-    num += (a[k] - b[k]).squaredNorm();
-    den += b[k].squaredNorm();
-  }
-  return std::sqrt(num / den);
-}
-
-bool has_warning(const std::vector<std::string>& w, const std::string& text) {
-  for (const std::string& s : w)
-    if (s.find(text) != std::string::npos) return true;
-  return false;
-}
+using sysid::test::has_warning;
+using sysid::test::relative_error;
+using sysid::test::rotated_modal_system;
 
 /// One hammer-tap record for input `which` of m: `taps` impacts of random
 /// amplitude at random times in the first half, each of the given sample shape,
@@ -86,7 +51,7 @@ const std::vector<double> kHardTip{1.0, 0.5};
 
 TEST(RealizationMarkovParameters, FromStateSpaceEqualsSimulatedImpulseResponse) {
   // Column j of y for a unit impulse on input j is h[k](:, j): exact up to rounding.
-  const sysid::StateSpace sys = modal_system({20.0, 70.0}, {0.02, 0.03}, 2, 3, 1);
+  const sysid::StateSpace sys = rotated_modal_system({20.0, 70.0}, {0.02, 0.03}, 2, 3, 1, kTs);
   const sysid::MarkovParameters mp = sysid::markov_parameters(sys, 30);
   ASSERT_EQ(mp.count(), 31);
   EXPECT_EQ(mp.inputs(), 2);
@@ -128,7 +93,7 @@ TEST(RealizationMarkovParameters, HammerTapDeconvolutionRecoversImpulseResponse)
   // equations: relative error energy ~ (q / N) / SNR = 0.075 * 0.005, i.e.
   // ~2 % RMS for a white force; measured 3.4 % (sparse impacts make Phi^T Phi
   // less uniform than a white force's); asserted 6 %, and ERA frequencies within 1 %.
-  const sysid::StateSpace sys = modal_system({45.0, 120.0, 260.0}, {0.08, 0.03, 0.025}, 1, 3, 3);
+  const sysid::StateSpace sys = rotated_modal_system({45.0, 120.0, 260.0}, {0.08, 0.03, 0.025}, 1, 3, 3, kTs);
   std::mt19937_64 rng(4);
   std::normal_distribution<double> g(0.0, 1.0);
   sysid::IoData taps;
@@ -167,7 +132,7 @@ TEST(RealizationMarkovParameters, RegularisationTamesASoftTip) {
   // Nyquist. Tikhonov regularisation at 0.1 of the RMS column norm damps those
   // bands; the total error must drop (the bias it adds is in bands where the
   // true response is small: all modes lie below 0.3 of Nyquist).
-  const sysid::StateSpace sys = modal_system({45.0, 120.0}, {0.08, 0.05}, 1, 2, 9);
+  const sysid::StateSpace sys = rotated_modal_system({45.0, 120.0}, {0.08, 0.05}, 1, 2, 9, kTs);
   std::mt19937_64 rng(10);
   std::normal_distribution<double> g(0.0, 1.0);
   sysid::IoData taps;
@@ -199,7 +164,7 @@ TEST(RealizationMarkovParameters, DeconvolutionIsExactWithoutNoiseAndRegularisat
   // Noise-free records, lambda = 0: Phi Theta = Y is consistent, and the QR
   // solution is exact up to rounding times cond(Phi).
   // Two inputs tapped in turn (MIMO regression), 2 outputs.
-  const sysid::StateSpace sys = modal_system({60.0, 150.0}, {0.08, 0.05}, 2, 2, 5);
+  const sysid::StateSpace sys = rotated_modal_system({60.0, 150.0}, {0.08, 0.05}, 2, 2, 5, kTs);
   std::mt19937_64 rng(6);
   sysid::IoData taps;
   taps.Ts = sys.Ts;
@@ -219,7 +184,7 @@ TEST(RealizationMarkovParameters, DeconvolutionIsExactWithoutNoiseAndRegularisat
 }
 
 TEST(RealizationMarkovParameters, DeconvolutionWarnsAndThrows) {
-  const sysid::StateSpace sys = modal_system({30.0}, {0.01}, 1, 1, 7);
+  const sysid::StateSpace sys = rotated_modal_system({30.0}, {0.01}, 1, 1, 7, kTs);
   std::mt19937_64 rng(8);
   const MatrixXd u = hammer_record(500, 1, 0, 1, kHardTip, rng);
   const sysid::IoData taps(u, sysid::simulate(sys, u), sys.Ts);

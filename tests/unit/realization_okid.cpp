@@ -16,71 +16,26 @@
 #include <random>
 #include <string>
 #include <vector>
+#include "checks.hpp"
+#include "random_systems.hpp"
 
 namespace test_unit_realization_okid {
 
 namespace {
 
 using Eigen::MatrixXd;
-
-/// Discrete modal system (Ts = 1), f in cycles/sample, random B, C, D and a
-/// random similarity (A not block-diagonal).
-sysid::StateSpace modal_system(const std::vector<double>& f, const std::vector<double>& zeta, int m, int l,
-                               std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  const int n = 2 * static_cast<int>(f.size());
-  MatrixXd A = MatrixXd::Zero(n, n);
-  for (std::size_t k = 0; k < f.size(); ++k) {
-    const std::complex<double> z =
-        std::exp(2.0 * std::numbers::pi * f[k] * std::complex<double>(-zeta[k], std::sqrt(1.0 - zeta[k] * zeta[k])));
-    const int i = 2 * static_cast<int>(k);
-    A(i, i) = z.real();
-    A(i, i + 1) = z.imag();
-    A(i + 1, i) = -z.imag();
-    A(i + 1, i + 1) = z.real();
-  }
-  MatrixXd B(n, m), C(l, n), D(l, m), T(n, n);
-  for (MatrixXd* M : {&B, &C, &D, &T})
-    for (Eigen::Index r = 0; r < M->rows(); ++r)
-      for (Eigen::Index c = 0; c < M->cols(); ++c) (*M)(r, c) = unit(rng);
-  T.diagonal().array() += 2.0;
-  const MatrixXd Ti = T.inverse();
-  return sysid::StateSpace(T * A * Ti, T * B, C * Ti, D, 1.0);
-}
-
-MatrixXd white(Eigen::Index N, Eigen::Index cols, std::uint64_t seed, double sigma = 1.0) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g(0.0, sigma);
-  MatrixXd x(N, cols);
-  for (Eigen::Index c = 0; c < cols; ++c)
-    for (Eigen::Index k = 0; k < N; ++k) x(k, c) = g(rng);
-  return x;
-}
-
-/// sqrt(sum ||a_k - b_k||^2 / sum ||b_k||^2) over the common length.
-double relative_error(const std::vector<MatrixXd>& a, const std::vector<MatrixXd>& b, std::size_t count) {
-  double num = 0.0, den = 0.0;
-  for (std::size_t k = 0; k < count; ++k) {
-    num += (a[k] - b[k]).squaredNorm();
-    den += b[k].squaredNorm();
-  }
-  return std::sqrt(num / den);
-}
-
-bool has_warning(const std::vector<std::string>& w, const std::string& text) {
-  for (const std::string& s : w)
-    if (s.find(text) != std::string::npos) return true;
-  return false;
-}
+using sysid::test::has_warning;
+using sysid::test::relative_error;
+using sysid::test::rotated_modal_system;
+using sysid::test::white_noise;
 
 TEST(RealizationOkid, NoiseFreeDataGiveExactMarkovParameters) {
   // Noise-free data from an order-6 system with 2 outputs: a deadbeat observer
   // exists for p l >= 6, the regression is then consistent and the recovered
   // system Markov parameters are exact to rounding, also when p l > n makes the
   // regression rank-deficient (every exact solution is a valid observer).
-  const sysid::StateSpace sys = modal_system({0.05, 0.12, 0.25}, {0.02, 0.01, 0.02}, 2, 2, 11);
-  const MatrixXd u = white(3000, 2, 1);
+  const sysid::StateSpace sys = rotated_modal_system({0.05, 0.12, 0.25}, {0.02, 0.01, 0.02}, 2, 2, 11);
+  const MatrixXd u = white_noise(3000, 2, 1);
   const MatrixXd y = sysid::simulate(sys, u);
   for (int p : {3, 6}) {
     sysid::OkidOptions o;
@@ -106,13 +61,13 @@ TEST(RealizationOkid, LightlyDampedNoisyDataPolesWithinOnePercent) {
   // as p grows (Juang et al. 1993, sec. 4); measured Markov error ~0.5 %, ERA
   // frequencies within 1e-4 and damping within ~3 %. Asserted: the required 1 %
   // on frequency, 25 % on damping (the least determined modal quantity).
-  const sysid::StateSpace sys = modal_system({0.05, 0.12, 0.25}, {0.02, 0.01, 0.02}, 2, 2, 11);
+  const sysid::StateSpace sys = rotated_modal_system({0.05, 0.12, 0.25}, {0.02, 0.01, 0.02}, 2, 2, 11);
   sysid::IoData data;
   data.Ts = 1.0;
   for (std::uint64_t rec = 0; rec < 2; ++rec) {
-    const MatrixXd u = white(10000, 2, 10 + rec);
+    const MatrixXd u = white_noise(10000, 2, 10 + rec);
     MatrixXd y = sysid::simulate(sys, u);
-    const MatrixXd v = white(y.rows(), y.cols(), 20 + rec);
+    const MatrixXd v = white_noise(y.rows(), y.cols(), 20 + rec);
     for (Eigen::Index c = 0; c < y.cols(); ++c)
       y.col(c) += 0.05 * std::sqrt(y.col(c).squaredNorm() / static_cast<double>(y.rows())) * v.col(c);
     data.add_experiment({u, y, "record" + std::to_string(rec)});
@@ -150,7 +105,7 @@ TEST(RealizationOkid, RecoversKalmanGainMarkovParametersOfAnInnovationModel) {
   // has its poles well inside the unit circle (asserted below 0.9), so p = 40
   // observer parameters capture the predictor (0.9^40 ~ 1.5 %). Measured error
   // of C A^(k-1) K over k = 1..10: a few %; asserted 15 %.
-  const sysid::StateSpace sys = modal_system({0.05, 0.12, 0.25}, {0.02, 0.01, 0.02}, 2, 2, 11);
+  const sysid::StateSpace sys = rotated_modal_system({0.05, 0.12, 0.25}, {0.02, 0.01, 0.02}, 2, 2, 11);
   const sysid::KalmanFilterResult kf = sysid::steady_state_kalman_filter(
       sys.A, sys.C, 0.01 * MatrixXd::Identity(6, 6), 0.01 * MatrixXd::Identity(2, 2), MatrixXd::Zero(6, 2));
   ASSERT_EQ(kf.status, sysid::KalmanFilterResult::Status::converged);
@@ -163,8 +118,8 @@ TEST(RealizationOkid, RecoversKalmanGainMarkovParametersOfAnInnovationModel) {
   Dk << sys.D, Le;
   const sysid::StateSpace innovation(sys.A, Bk, sys.C, Dk, 1.0);
   MatrixXd ue(20000, 4);
-  ue.leftCols(2) = white(20000, 2, 6);
-  ue.rightCols(2) = white(20000, 2, 7);  // e = Le * unit white noise
+  ue.leftCols(2) = white_noise(20000, 2, 6);
+  ue.rightCols(2) = white_noise(20000, 2, 7);  // e = Le * unit white noise
   const MatrixXd y = sysid::simulate(innovation, ue);
   sysid::OkidOptions o;
   o.observer_order = 40;
@@ -188,10 +143,10 @@ TEST(RealizationOkid, RecoversKalmanGainMarkovParametersOfAnInnovationModel) {
 TEST(RealizationOkid, WarnsWhenTheObserverOrderIsTooSmall) {
   // Output noise and p = 5: the least-squares observer's parameters have not
   // decayed at lag p.
-  const sysid::StateSpace sys = modal_system({0.05, 0.12, 0.25}, {0.02, 0.01, 0.02}, 2, 2, 11);
-  const MatrixXd u = white(5000, 2, 30);
+  const sysid::StateSpace sys = rotated_modal_system({0.05, 0.12, 0.25}, {0.02, 0.01, 0.02}, 2, 2, 11);
+  const MatrixXd u = white_noise(5000, 2, 30);
   MatrixXd y = sysid::simulate(sys, u);
-  y += 0.2 * white(y.rows(), y.cols(), 31);
+  y += 0.2 * white_noise(y.rows(), y.cols(), 31);
   sysid::OkidOptions o;
   o.observer_order = 5;
   const sysid::OkidResult r = sysid::okid(sysid::IoData(u, y, 1.0), o);
@@ -199,7 +154,7 @@ TEST(RealizationOkid, WarnsWhenTheObserverOrderIsTooSmall) {
 }
 
 TEST(RealizationOkid, BadOptionsThrow) {
-  const MatrixXd u = white(100, 1, 1), y = white(100, 2, 2);
+  const MatrixXd u = white_noise(100, 1, 1), y = white_noise(100, 2, 2);
   const sysid::IoData data(u, y, 1.0);
   auto expect_throw = [&](const sysid::OkidOptions& o, const std::string& text) {
     try {

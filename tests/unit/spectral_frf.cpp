@@ -13,6 +13,7 @@
 #include <numbers>
 #include <random>
 #include <vector>
+#include "random_systems.hpp"
 
 namespace test_unit_spectral_frf {
 
@@ -20,14 +21,7 @@ namespace {
 
 constexpr double kFs = 1000.0;
 
-Eigen::MatrixXd white(Eigen::Index n, Eigen::Index cols, double sigma, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g(0.0, sigma);
-  Eigen::MatrixXd x(n, cols);
-  for (Eigen::Index c = 0; c < cols; ++c)
-    for (Eigen::Index k = 0; k < n; ++k) x(k, c) = g(rng);
-  return x;
-}
+using sysid::test::white_noise;
 
 /// Second-order resonance block (poles r e^{+-i theta}) in controllable form.
 void resonance(Eigen::MatrixXd& A, Eigen::Index at, double f0, double zeta) {
@@ -75,8 +69,8 @@ TEST(SpectralFrf, H1TrueFrfInsideConfidenceBound) {
   const sysid::StateSpace sys = siso_system();
   const Eigen::Index n = 1 << 18;
   const double sn = 1.0;
-  const Eigen::MatrixXd u = white(n, 1, 1.0, 1);
-  const Eigen::MatrixXd y = sysid::simulate(sys, u) + white(n, 1, sn, 2);
+  const Eigen::MatrixXd u = white_noise(n, 1, 1, 1.0);
+  const Eigen::MatrixXd y = sysid::simulate(sys, u) + white_noise(n, 1, 2, sn);
   sysid::FrfOptions o;
   o.welch.nfft = 2048;
   o.confidence = 0.99;
@@ -116,7 +110,7 @@ TEST(SpectralFrf, H1TrueFrfInsideConfidenceBound) {
 TEST(SpectralFrf, CoherenceFollowsTheory) {
   const sysid::StateSpace sys = siso_system();
   const Eigen::Index n = 1 << 18;
-  const Eigen::MatrixXd u = white(n, 1, 1.0, 3);
+  const Eigen::MatrixXd u = white_noise(n, 1, 3, 1.0);
   const Eigen::MatrixXd y0 = sysid::simulate(sys, u);
   sysid::FrfOptions o;
   o.welch.nfft = 2048;
@@ -128,7 +122,7 @@ TEST(SpectralFrf, CoherenceFollowsTheory) {
     ASSERT_NEAR(clean.multiple_coherence(k, 0), clean.coherence[static_cast<std::size_t>(k)](0, 0), 1e-10);
   }
   const double sn = 0.6;
-  const sysid::FrfResult noisy = sysid::frf(u, Eigen::MatrixXd(y0 + white(n, 1, sn, 4)), kFs, o);
+  const sysid::FrfResult noisy = sysid::frf(u, Eigen::MatrixXd(y0 + white_noise(n, 1, 4, sn)), kFs, o);
   const std::vector<Eigen::MatrixXcd> G = sysid::frequency_response(sys, noisy.freq_hz);
   const double nd = noisy.dof(0) / 2.0;
   int ok = 0, total = 0;
@@ -152,9 +146,9 @@ TEST(SpectralFrf, H2UnbiasedWithInputNoise) {
   const sysid::StateSpace sys = siso_system();
   const Eigen::Index n = 1 << 17;
   const double sm = 0.5;
-  const Eigen::MatrixXd u = white(n, 1, 1.0, 5);
+  const Eigen::MatrixXd u = white_noise(n, 1, 5, 1.0);
   const Eigen::MatrixXd y = sysid::simulate(sys, u);
-  const Eigen::MatrixXd um = u + white(n, 1, sm, 6);
+  const Eigen::MatrixXd um = u + white_noise(n, 1, 6, sm);
   sysid::FrfOptions o;
   o.welch.nfft = 1024;
   o.estimator = sysid::FrfEstimator::h2;
@@ -194,7 +188,7 @@ TEST(SpectralFrf, MimoSimultaneousAndOneAtATime) {
   const Eigen::Index n = 1 << 18;
   sysid::FrfOptions o;
   o.welch.nfft = 2048;
-  const Eigen::MatrixXd u = white(n, 2, 1.0, 7);
+  const Eigen::MatrixXd u = white_noise(n, 2, 7, 1.0);
   const sysid::FrfResult sim = sysid::frf(u, sysid::simulate(sys, u), kFs, o);
   EXPECT_LT(max_relative_error(sim, sys), 0.01);
   EXPECT_TRUE(sim.warnings.empty()) << sim.brief_report();
@@ -217,7 +211,7 @@ TEST(SpectralFrf, MimoSimultaneousAndOneAtATime) {
   data.Ts = 1.0 / kFs;
   for (Eigen::Index j = 0; j < 2; ++j) {
     Eigen::MatrixXd uj = Eigen::MatrixXd::Zero(n, 2);
-    uj.col(j) = white(n, 1, 1.0, 10 + static_cast<std::uint64_t>(j));
+    uj.col(j) = white_noise(n, 1, 10 + static_cast<std::uint64_t>(j), 1.0);
     data.add_experiment({uj, sysid::simulate(sys, uj), "exp" + std::to_string(j + 1)});
   }
   const sysid::FrfResult one = sysid::frf_one_at_a_time(data, o);
@@ -241,7 +235,7 @@ TEST(SpectralFrf, MimoSimultaneousAndOneAtATime) {
   sysid::IoData leaky;
   leaky.Ts = 1.0 / kFs;
   for (Eigen::Index j = 0; j < 2; ++j) {
-    Eigen::MatrixXd uj = 0.5 * white(n, 2, 1.0, 20 + static_cast<std::uint64_t>(j));
+    Eigen::MatrixXd uj = 0.5 * white_noise(n, 2, 20 + static_cast<std::uint64_t>(j), 1.0);
     uj.col(j) *= 2.0;
     leaky.add_experiment({uj, sysid::simulate(sys, uj), "leaky"});
   }
@@ -260,7 +254,7 @@ TEST(SpectralFrf, IllConditionedInputsFlagged) {
   const sysid::StateSpace sys = mimo_system();
   const Eigen::Index n = 1 << 14;
   Eigen::MatrixXd u(n, 2);
-  u.col(0) = white(n, 1, 1.0, 30);
+  u.col(0) = white_noise(n, 1, 30, 1.0);
   u.col(1) = u.col(0);
   sysid::FrfOptions o;
   o.welch.nfft = 256;
@@ -269,7 +263,7 @@ TEST(SpectralFrf, IllConditionedInputsFlagged) {
   EXPECT_TRUE(std::isnan(same.H[10](0, 0).real()));
   ASSERT_FALSE(same.warnings.empty());
   EXPECT_NE(same.warnings.front().find("ill-conditioned"), std::string::npos);
-  u.col(1) += 1e-5 * white(n, 1, 1.0, 31);  // condition ~ 1 / (1e-5)^2 / 2 ~ 1e10
+  u.col(1) += 1e-5 * white_noise(n, 1, 31, 1.0);  // condition ~ 1 / (1e-5)^2 / 2 ~ 1e10
   const sysid::FrfResult near = sysid::frf(u, sysid::simulate(sys, u), kFs, o);
   EXPECT_GT(near.input_condition(10), 1e8);
   EXPECT_TRUE(near.ill_conditioned[10]);
@@ -342,8 +336,8 @@ TEST(SpectralEtfe, ExactForMultisineAtExcitedBins) {
 TEST(SpectralEtfe, SmoothingReducesScatter) {
   const sysid::StateSpace sys = siso_system();
   const Eigen::Index n = 4096;
-  const Eigen::MatrixXd u = white(n, 1, 1.0, 40);
-  const Eigen::MatrixXd y = sysid::simulate(sys, u) + white(n, 1, 0.3, 41);
+  const Eigen::MatrixXd u = white_noise(n, 1, 40, 1.0);
+  const Eigen::MatrixXd y = sysid::simulate(sys, u) + white_noise(n, 1, 41, 0.3);
   sysid::EtfeOptions eo;
   const sysid::EtfeResult raw = sysid::etfe(u, y, kFs, eo);
   eo.smoothing_bins = 20;
@@ -359,7 +353,7 @@ TEST(SpectralEtfe, SmoothingReducesScatter) {
 }
 
 TEST(SpectralFrf, BadArgumentsThrow) {
-  const Eigen::MatrixXd u = white(512, 2, 1.0, 50), y = white(512, 1, 1.0, 51);
+  const Eigen::MatrixXd u = white_noise(512, 2, 50, 1.0), y = white_noise(512, 1, 51, 1.0);
   sysid::FrfOptions o;
   o.welch.nfft = 64;
   EXPECT_THROW(sysid::frf(u, y, 0.0, o), std::invalid_argument);

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include "random_systems.hpp"
 
 namespace test_unit_spectral_welch {
 
@@ -20,15 +21,7 @@ using sysid::Detrend;
 using sysid::SpectralScaling;
 using sysid::WelchOptions;
 using sysid::WindowType;
-
-Eigen::MatrixXd white(Eigen::Index n, Eigen::Index cols, double sigma, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g(0.0, sigma);
-  Eigen::MatrixXd x(n, cols);
-  for (Eigen::Index c = 0; c < cols; ++c)
-    for (Eigen::Index k = 0; k < n; ++k) x(k, c) = g(rng);
-  return x;
-}
+using sysid::test::white_noise;
 
 const WindowType kWindows[] = {WindowType::rectangular, WindowType::hann, WindowType::hamming, WindowType::blackman_harris,
                                WindowType::flattop};
@@ -64,7 +57,7 @@ TEST(SpectralWindow, ShapesAndNames) {
 // Wilson-Hilferty quantiles are good to ~1 % at nu ~ 480).
 TEST(SpectralWelch, WhiteNoiseLevelWithinChiSquareBound) {
   const double fs = 1000.0, sigma = 2.0;
-  const Eigen::MatrixXd x = white(1 << 18, 2, sigma, 11);
+  const Eigen::MatrixXd x = white_noise(1 << 18, 2, 11, sigma);
   WelchOptions o;
   o.nfft = 1024;
   const sysid::PowerSpectrum ps = sysid::welch_psd(x, fs, o);
@@ -100,7 +93,7 @@ TEST(SpectralWelch, WhiteNoiseLevelWithinChiSquareBound) {
 // of sum_n (w_n x_n)^2 / sum_n w_n^2 exactly (any window), and the variance in expectation.
 TEST(SpectralWelch, ParsevalForEveryWindow) {
   const double fs = 250.0;
-  const Eigen::MatrixXd x = white(20000, 1, 1.5, 5);
+  const Eigen::MatrixXd x = white_noise(20000, 1, 5, 1.5);
   for (WindowType w : kWindows) {
     WelchOptions o;
     o.nfft = 500;  // not a power of two: exercises the generic kissfft path
@@ -125,7 +118,7 @@ TEST(SpectralWelch, ParsevalForEveryWindow) {
 TEST(SpectralPeriodogram, ParsevalExactAndZeroPadding) {
   const double fs = 10.0;
   for (Eigen::Index n : {Eigen::Index(1000), Eigen::Index(999)}) {  // even and odd lengths
-    const Eigen::MatrixXd x = white(n, 2, 1.0, 3);
+    const Eigen::MatrixXd x = white_noise(n, 2, 3, 1.0);
     sysid::PeriodogramOptions o;
     o.detrend = Detrend::none;
     for (Eigen::Index nfft : {Eigen::Index(0), Eigen::Index(1500)}) {
@@ -144,7 +137,7 @@ TEST(SpectralPeriodogram, ParsevalExactAndZeroPadding) {
 
 TEST(SpectralWelch, CsdWithItselfIsPsdAndHermitian) {
   const double fs = 100.0;
-  Eigen::MatrixXd x = white(8192, 3, 1.0, 21);
+  Eigen::MatrixXd x = white_noise(8192, 3, 21, 1.0);
   x.col(1) += 0.5 * x.col(0);  // correlated channels: non-trivial off-diagonal terms
   WelchOptions o;
   o.nfft = 256;
@@ -169,7 +162,7 @@ TEST(SpectralWelch, CsdWithItselfIsPsdAndHermitian) {
 TEST(SpectralWelch, CsdConventionDelayedCopy) {
   const double fs = 1000.0, g = 0.7;
   const Eigen::Index d = 3, n = 1 << 16;
-  const Eigen::MatrixXd x = white(n + d, 1, 1.0, 8);
+  const Eigen::MatrixXd x = white_noise(n + d, 1, 8, 1.0);
   const Eigen::MatrixXd a = x.bottomRows(n), b = g * x.topRows(n);  // b[k] = g x[k + d - d] lags a by d
   WelchOptions o;
   o.nfft = 1024;
@@ -186,7 +179,7 @@ TEST(SpectralWelch, CsdConventionDelayedCopy) {
 
 TEST(SpectralWelch, LinearDetrendRemovesRampExactly) {
   const double fs = 50.0;
-  const Eigen::MatrixXd w = white(5000, 1, 1.0, 4);
+  const Eigen::MatrixXd w = white_noise(5000, 1, 4, 1.0);
   Eigen::MatrixXd ramp = w;
   for (Eigen::Index k = 0; k < 5000; ++k) ramp(k, 0) += 3.0 + 0.01 * static_cast<double>(k);
   WelchOptions o;
@@ -214,7 +207,7 @@ TEST(SpectralWelch, FlattopSpectrumScalingReadsSinePower) {
 }
 
 TEST(SpectralWelch, NfftHalvedForShortRecords) {
-  const Eigen::MatrixXd x = white(700, 1, 1.0, 1);
+  const Eigen::MatrixXd x = white_noise(700, 1, 1, 1.0);
   const sysid::PowerSpectrum ps = sysid::welch_psd(x, 1.0, WelchOptions{});
   EXPECT_EQ(ps.nfft, 512);
   EXPECT_EQ(ps.freq_hz.size(), 257);
@@ -223,7 +216,7 @@ TEST(SpectralWelch, NfftHalvedForShortRecords) {
 }
 
 TEST(SpectralWelch, BadArgumentsThrow) {
-  const Eigen::MatrixXd x = white(100, 1, 1.0, 1);
+  const Eigen::MatrixXd x = white_noise(100, 1, 1, 1.0);
   WelchOptions o;
   o.nfft = 32;
   EXPECT_THROW(sysid::welch_psd(x, 0.0, o), std::invalid_argument);
