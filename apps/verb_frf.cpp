@@ -34,6 +34,7 @@ struct FrfArgs {
   std::string band;  ///< LO:HI Hz of the FE frequency grid
   Eigen::Index points = 500;
   std::string spacing = "linear";
+  std::string solver = "automatic";  ///< sparse_frf's method
 };
 
 double db(double a) { return 20.0 * std::log10(a); }  // 0 -> -inf, inf -> inf: written as such
@@ -52,12 +53,21 @@ void run_fem_frf(const FrfArgs& a) {
   if (a.spacing == "log") f = Eigen::VectorXd::LinSpaced(a.points, std::log10(lo), std::log10(hi)).unaryExpr([](double e) {
     return std::pow(10.0, e);
   });
-  const fem::SparseFrfResult r = fem::sparse_frf(model, f);
+  fem::SparseFrfOptions options;
+  options.method = fem::sparse_frf_method_from_name(a.solver);
+  const fem::SparseFrfResult r = fem::sparse_frf(model, f, options);
   std::cout << "frequency response of " << a.fem_path << " (" << model.dofs() << " DOFs, " << model.inputs.size()
             << " input(s), " << model.outputs.size() << " output(s)) at " << f.size() << " frequencies, " << fmt(lo)
-            << ".." << fmt(hi) << " Hz: " << r.symbolic_factorisations << " symbolic analysis, "
-            << r.numeric_factorisations << " numeric factorisations; smallest reciprocal condition " << fmt(r.min_rcond, 3)
-            << " at " << fmt(r.min_rcond_freq_hz) << " Hz\n";
+            << ".." << fmt(hi) << " Hz, " << fem::sparse_frf_method_name(r.method) << ": "
+            << r.symbolic_factorisations << " symbolic analysis, " << r.numeric_factorisations
+            << " numeric factorisations";
+  if (r.krylov_frequencies > 0)
+    std::cout << "; " << r.krylov_frequencies << " frequencies from a Krylov basis of " << r.krylov_basis_size
+              << " columns (largest estimated error " << fmt(r.krylov_max_estimated_error, 3) << ")";
+  if (r.direct_frequencies > 0)
+    std::cout << "; " << r.direct_frequencies << " solved directly, smallest reciprocal condition "
+              << fmt(r.min_rcond, 3) << " at " << fmt(r.min_rcond_freq_hz) << " Hz";
+  std::cout << "\n";
   for (const auto& w : r.warnings) warn(verb, w);
   const auto l = static_cast<Eigen::Index>(r.output_names.size()), m = static_cast<Eigen::Index>(r.input_names.size());
   const double to_deg = 180.0 / std::numbers::pi;
@@ -236,6 +246,11 @@ Verb register_frf(CLI::App& app) {
   cmd->add_option("--spacing", args->spacing, "with --fem: linear or log frequency grid")
       ->capture_default_str()
       ->check(CLI::IsMember({"linear", "log"}));
+  cmd->add_option("--solver", args->solver,
+                  "with --fem: direct (a sparse LU per frequency), krylov (one factorisation for the sweep, every "
+                  "frequency certified by its residual) or automatic (krylov for >= 50 frequencies and >= 2000 DOFs)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"automatic", "direct", "krylov"}));
   cmd->footer(
       "Columns: f_hz, then for each output y and input u: re_<y>_<u>, im_<y>_<u>, mag_db_<y>_<u>,\n"
       "phase_deg_<y>_<u> (wrapped to +-180), coh_<y>_<u> (ordinary coherence), and the confidence\n"

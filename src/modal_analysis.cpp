@@ -14,6 +14,7 @@
 #include <stdexcept>
 
 #include "sysid/core/errors.hpp"
+#include "sysid/fem/detail/shifted_stiffness.hpp"
 
 namespace sysid::fem {
 
@@ -22,52 +23,25 @@ namespace {
 using SparseMatrix = Eigen::SparseMatrix<double>;
 using Cholesky = Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lower>;
 
-/// Spectra's shift-invert operator y = (K - sigma M)^{-1} x, with the factor from
-/// CHOLMOD. The symbolic analysis of the pattern of K + M is done once.
+/// Spectra's shift-invert operator y = (K - sigma M)^{-1} x on the shared CHOLMOD
+/// factor (fem/detail/shifted_stiffness.hpp).
 class CholmodShiftInvert {
  public:
   using Scalar = double;
 
-  CholmodShiftInvert(const SparseMatrix& stiffness, const SparseMatrix& mass) : m_k(stiffness), m_m(mass) {
-    m_solver.cholmod().print = 0;  // failures are reported by exception, not on stderr
-  }
-  Eigen::Index rows() const { return m_k.rows(); }
-  Eigen::Index cols() const { return m_k.cols(); }
-
-  /// Factorises K - sigma M; returns false when it is not positive definite. The
-  /// factor of the last successful shift is kept: Spectra's constructor sets the
-  /// shift the caller has just factorised, which then costs nothing.
-  bool try_shift(double sigma) {
-    if (m_factorised && sigma == m_sigma) return true;
-    m_factorised = false;
-    SparseMatrix shifted = m_k - sigma * m_m;
-    shifted.makeCompressed();
-    if (!m_analysed) {
-      m_solver.analyzePattern(shifted);
-      m_analysed = true;
-    }
-    m_solver.factorize(shifted);
-    m_factorised = m_solver.info() == Eigen::Success;
-    m_sigma = sigma;
-    return m_factorised;
-  }
+  explicit CholmodShiftInvert(detail::ShiftedStiffnessFactor& factor) : m_factor(factor) {}
+  Eigen::Index rows() const { return m_factor.rows(); }
+  Eigen::Index cols() const { return m_factor.rows(); }
+  /// Spectra's constructor sets the shift the caller has just factorised, which
+  /// then costs nothing.
   void set_shift(double sigma) {
-    if (!try_shift(sigma))
+    if (!m_factor.try_shift(sigma))
       throw NumericalError("modal_analysis: K - sigma M is not positive definite at sigma = " + std::to_string(sigma));
   }
-  void perform_op(const double* x_in, double* y_out) const {
-    Eigen::Map<const Eigen::VectorXd> x(x_in, rows());
-    Eigen::Map<Eigen::VectorXd> y(y_out, rows());
-    y = m_solver.solve(x);
-  }
+  void perform_op(const double* x_in, double* y_out) const { m_factor.solve(x_in, y_out); }
 
  private:
-  const SparseMatrix& m_k;
-  const SparseMatrix& m_m;
-  Cholesky m_solver;
-  bool m_analysed = false;
-  bool m_factorised = false;
-  double m_sigma = 0.0;
+  detail::ShiftedStiffnessFactor& m_factor;
 };
 
 }  // namespace
@@ -98,18 +72,13 @@ ModalAnalysisResult modal_analysis(const SecondOrderModel& model, const ModalAna
   }
 
   ModalAnalysisResult r;
-  CholmodShiftInvert op(model.stiffness, model.mass);
+  detail::ShiftedStiffnessFactor factor(model.stiffness, model.mass);
   // A small negative shift (file comment), enlarged if K - sigma M is not yet
   // numerically positive definite (a singular K whose round-off eigenvalues are
   // negative beyond the first try).
   const double w_shift = 2.0 * std::numbers::pi * options.rigid_body_shift_hz;
-  r.shift = -w_shift * w_shift;
-  for (int attempt = 0; !op.try_shift(r.shift); ++attempt) {
-    if (attempt == 6)
-      throw NumericalError("modal_analysis: K - sigma M is not positive definite down to sigma = " +
-                           std::to_string(r.shift) + " (is K positive semi-definite?)");
-    r.shift *= 100.0;
-  }
+  r.shift = factor.factorise_below_zero(-w_shift * w_shift, 7, "modal_analysis");
+  CholmodShiftInvert op(factor);
   Spectra::SparseSymMatProd<double> mass_op(model.mass);
   Spectra::SymGEigsShiftSolver<CholmodShiftInvert, Spectra::SparseSymMatProd<double>, Spectra::GEigsMode::ShiftInvert>
       solver(op, mass_op, nev, ncv, r.shift);

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "sysid/core/errors.hpp"
+#include "sysid/fem/detail/krylov_sweep.hpp"
 
 namespace sysid::fem {
 
@@ -37,6 +38,28 @@ Eigen::VectorXd values_on_pattern(const SparseMatrix& pattern, const SparseMatri
   }
   return values;
 }
+
+/// Z(omega) = K - omega^2 M + j (omega C + eta K) on the union pattern of K, M and
+/// C (C the effective damping matrix, eta = 2 zeta for a modal ratio): every
+/// Z(omega) has that pattern, and its values are O(nnz) from three aligned arrays.
+struct DynamicStiffness {
+  SparseMatrix pattern;
+  Eigen::VectorXd k, m, c;
+  double loss_factor = 0.0;
+
+  explicit DynamicStiffness(const SecondOrderModel& model) {
+    const SparseMatrix damping = model.effective_damping_matrix();
+    loss_factor = model.damping.kind == DampingKind::modal_ratio ? 2.0 * model.damping.ratio : 0.0;
+    pattern = model.stiffness.cwiseAbs() + model.mass.cwiseAbs() + damping.cwiseAbs();
+    pattern.makeCompressed();
+    k = values_on_pattern(pattern, model.stiffness);
+    m = values_on_pattern(pattern, model.mass);
+    c = values_on_pattern(pattern, damping);
+  }
+  Complex value(Eigen::Index q, double omega) const {
+    return {k(q) - omega * omega * m(q), omega * c(q) + loss_factor * k(q)};
+  }
+};
 
 /// Owner of UMFPACK's symbolic and numeric objects (freed on every path).
 struct UmfpackFactors {
@@ -80,39 +103,24 @@ ComplexPattern pattern_of(const Eigen::SparseMatrix<Complex>& z) {
   return p;
 }
 
-}  // namespace
+/// H at angular frequency w from the displacements at the output DOFs per unit
+/// force (outputs x inputs): the quantity factor of each output.
+void set_response(const SecondOrderModel& model, double w, const Eigen::MatrixXcd& at_outputs, Eigen::MatrixXcd& h) {
+  for (Eigen::Index i = 0; i < at_outputs.rows(); ++i)
+    h.row(i) = quantity_factor(model.outputs[static_cast<std::size_t>(i)].quantity, w) * at_outputs.row(i);
+}
 
-SparseFrfResult sparse_frf(const SecondOrderModel& model, const Eigen::VectorXd& freq_hz, const SparseFrfOptions& options) {
-  model.validate();
-  for (Eigen::Index k = 0; k < freq_hz.size(); ++k)
-    if (!std::isfinite(freq_hz(k)) || freq_hz(k) < 0.0)
-      throw std::invalid_argument("sparse_frf: frequencies must be finite and >= 0 (entry " + std::to_string(k) + ")");
-
+/// UMFPACK solves at the frequencies freq_hz(which[...]): H, the counters, rcond;
+/// singular frequencies get NaN and are appended to `singular_hz`.
+void direct_solves(const SecondOrderModel& model, const DynamicStiffness& dynamic, const Eigen::VectorXd& freq_hz,
+                   const std::vector<Eigen::Index>& which, const SparseFrfOptions& options, SparseFrfResult& r,
+                   std::vector<double>& singular_hz) {
   const Eigen::Index n = model.dofs(), m = static_cast<Eigen::Index>(model.inputs.size()),
                      l = static_cast<Eigen::Index>(model.outputs.size());
-  SparseFrfResult r;
-  r.freq_hz = freq_hz;
-  r.H.assign(static_cast<std::size_t>(freq_hz.size()), Eigen::MatrixXcd::Zero(l, m));
-  for (const auto& in : model.inputs) r.input_names.push_back(in.name);
-  for (const auto& out : model.outputs) r.output_names.push_back(out.name);
-  r.min_rcond = std::numeric_limits<double>::infinity();
-
   const SparseMatrix c = model.effective_damping_matrix();
-  // Modal damping ratio as structural damping: K (1 + j eta), eta = 2 zeta (header).
-  const double eta = model.damping.kind == DampingKind::modal_ratio ? 2.0 * model.damping.ratio : 0.0;
-  if (eta > 0.0)
-    r.warnings.push_back("modal damping ratio " + std::to_string(model.damping.ratio) +
-                         " applied as structural damping K (1 + 2j zeta) in the direct solve: exact at each resonance, "
-                         "not viscous away from it");
-
-  // The union pattern of K, M, C and the three value arrays aligned with it.
-  SparseMatrix pattern = model.stiffness.cwiseAbs() + model.mass.cwiseAbs() + c.cwiseAbs();
-  pattern.makeCompressed();
-  const Eigen::VectorXd kv = values_on_pattern(pattern, model.stiffness), mv = values_on_pattern(pattern, model.mass),
-                        cv = values_on_pattern(pattern, c);
-  Eigen::SparseMatrix<Complex> z0 = pattern.cast<Complex>();
-  ComplexPattern z = pattern_of(z0);
-  const auto nnz = static_cast<std::size_t>(pattern.nonZeros());
+  const double eta = dynamic.loss_factor;
+  ComplexPattern z = pattern_of(dynamic.pattern.cast<Complex>());
+  const auto nnz = static_cast<std::size_t>(dynamic.pattern.nonZeros());
 
   double control[UMFPACK_CONTROL], info[UMFPACK_INFO];
   umfpack_zi_defaults(control);
@@ -123,19 +131,20 @@ SparseFrfResult sparse_frf(const SecondOrderModel& model, const Eigen::VectorXd&
   control[UMFPACK_IRSTEP] = 0;
   UmfpackFactors factors;
   std::vector<double> rhs(2 * static_cast<std::size_t>(n), 0.0), x(2 * static_cast<std::size_t>(n), 0.0);
-  std::vector<double> singular_hz;
+  Eigen::MatrixXcd at_outputs(l, m);
 
-  for (Eigen::Index k = 0; k < freq_hz.size(); ++k) {
-    const double w = 2.0 * std::numbers::pi * freq_hz(k), w2 = w * w;
+  for (const Eigen::Index k : which) {
+    const double w = 2.0 * std::numbers::pi * freq_hz(k);
     if (options.reuse_symbolic) {
       for (std::size_t q = 0; q < nnz; ++q) {
-        z.values[2 * q] = kv(static_cast<Eigen::Index>(q)) - w2 * mv(static_cast<Eigen::Index>(q));
-        z.values[2 * q + 1] = w * cv(static_cast<Eigen::Index>(q)) + eta * kv(static_cast<Eigen::Index>(q));
+        const Complex value = dynamic.value(static_cast<Eigen::Index>(q), w);
+        z.values[2 * q] = value.real();
+        z.values[2 * q + 1] = value.imag();
       }
     } else {
       // From scratch: assemble Z with sparse sums and analyse its pattern anew.
       const Eigen::SparseMatrix<Complex> zk = model.stiffness.cast<Complex>() * Complex(1.0, eta) -
-                                              w2 * model.mass.cast<Complex>() + Complex(0.0, w) * c.cast<Complex>();
+                                              (w * w) * model.mass.cast<Complex>() + Complex(0.0, w) * c.cast<Complex>();
       z = pattern_of(zk);
       factors.free_symbolic();
     }
@@ -149,6 +158,7 @@ SparseFrfResult sparse_frf(const SecondOrderModel& model, const Eigen::VectorXd&
     const int status = umfpack_zi_numeric(z.outer.data(), z.inner.data(), z.values.data(), nullptr, factors.symbolic,
                                           &factors.numeric, control, info);
     ++r.numeric_factorisations;
+    ++r.direct_frequencies;
     if (status != UMFPACK_OK && status != UMFPACK_WARNING_singular_matrix)
       throw NumericalError(umfpack_failure("numeric factorisation", status, freq_hz(k)));
     const double rcond = info[UMFPACK_RCOND];
@@ -170,13 +180,98 @@ SparseFrfResult sparse_frf(const SecondOrderModel& model, const Eigen::VectorXd&
       rhs[2 * dof] = 0.0;
       if (solved != UMFPACK_OK) throw NumericalError(umfpack_failure("solve", solved, freq_hz(k)));
       for (Eigen::Index i = 0; i < l; ++i) {
-        const DofOutput& out = model.outputs[static_cast<std::size_t>(i)];
-        const auto d = static_cast<std::size_t>(out.dof);
-        const Complex displacement(x[2 * d], x[2 * d + 1]);
-        h(i, j) = quantity_factor(out.quantity, w) * displacement;
+        const auto d = static_cast<std::size_t>(model.outputs[static_cast<std::size_t>(i)].dof);
+        at_outputs(i, j) = Complex(x[2 * d], x[2 * d + 1]);
       }
     }
+    set_response(model, w, at_outputs, h);
   }
+}
+
+/// The method `options` ask for, automatic resolved (header).
+SparseFrfMethod resolve_method(const SecondOrderModel& model, const Eigen::VectorXd& freq_hz, const SparseFrfOptions& options) {
+  if (options.method != SparseFrfMethod::automatic) return options.method;
+  const bool proportional = model.damping.kind != DampingKind::matrix;
+  return proportional && freq_hz.size() >= 50 && model.dofs() >= 2000 ? SparseFrfMethod::krylov : SparseFrfMethod::direct;
+}
+
+}  // namespace
+
+const char* sparse_frf_method_name(SparseFrfMethod method) {
+  switch (method) {
+    case SparseFrfMethod::direct: return "direct";
+    case SparseFrfMethod::krylov: return "krylov";
+    case SparseFrfMethod::automatic: break;
+  }
+  return "automatic";
+}
+
+SparseFrfMethod sparse_frf_method_from_name(const std::string& name) {
+  for (const SparseFrfMethod method : {SparseFrfMethod::automatic, SparseFrfMethod::direct, SparseFrfMethod::krylov})
+    if (name == sparse_frf_method_name(method)) return method;
+  throw std::invalid_argument("unknown sparse FRF method '" + name + "' (expected automatic, direct or krylov)");
+}
+
+SparseFrfResult sparse_frf(const SecondOrderModel& model, const Eigen::VectorXd& freq_hz, const SparseFrfOptions& options) {
+  model.validate();
+  for (Eigen::Index k = 0; k < freq_hz.size(); ++k)
+    if (!std::isfinite(freq_hz(k)) || freq_hz(k) < 0.0)
+      throw std::invalid_argument("sparse_frf: frequencies must be finite and >= 0 (entry " + std::to_string(k) + ")");
+  if (!(options.krylov_tolerance > 0.0) || options.krylov_max_basis < 1 || !(options.krylov_shift_hz >= 0.0))
+    throw std::invalid_argument("sparse_frf: need krylov_tolerance > 0, krylov_max_basis >= 1, krylov_shift_hz >= 0");
+
+  const Eigen::Index m = static_cast<Eigen::Index>(model.inputs.size()), l = static_cast<Eigen::Index>(model.outputs.size());
+  SparseFrfResult r;
+  r.freq_hz = freq_hz;
+  r.H.assign(static_cast<std::size_t>(freq_hz.size()), Eigen::MatrixXcd::Zero(l, m));
+  for (const auto& in : model.inputs) r.input_names.push_back(in.name);
+  for (const auto& out : model.outputs) r.output_names.push_back(out.name);
+  r.min_rcond = std::numeric_limits<double>::infinity();
+  r.method = resolve_method(model, freq_hz, options);
+
+  const DynamicStiffness dynamic(model);
+  // Modal damping ratio as structural damping: K (1 + j eta), eta = 2 zeta (header).
+  if (dynamic.loss_factor > 0.0)
+    r.warnings.push_back("modal damping ratio " + std::to_string(model.damping.ratio) +
+                         " applied as structural damping K (1 + 2j zeta) in the direct solve: exact at each resonance, "
+                         "not viscous away from it");
+
+  std::vector<Eigen::Index> direct;
+  if (r.method == SparseFrfMethod::krylov) {
+    const detail::KrylovSweepOptions ko{.tolerance = options.krylov_tolerance,
+                                        .max_basis = options.krylov_max_basis,
+                                        .shift_hz = options.krylov_shift_hz};
+    const detail::KrylovSweepResult sweep = detail::krylov_sweep(model, 2.0 * std::numbers::pi * freq_hz, ko);
+    r.symbolic_factorisations += sweep.symbolic_analyses;
+    r.numeric_factorisations += sweep.numeric_factorisations;
+    r.krylov_basis_size = sweep.basis_size;
+    r.krylov_frequencies = sweep.certified;
+    r.krylov_max_estimated_error = sweep.max_estimated_error;
+    for (Eigen::Index k = 0; k < freq_hz.size(); ++k) {
+      const Eigen::MatrixXcd& at_outputs = sweep.output_displacement[static_cast<std::size_t>(k)];
+      if (at_outputs.size() == 0) direct.push_back(k);
+      else set_response(model, 2.0 * std::numbers::pi * freq_hz(k), at_outputs, r.H[static_cast<std::size_t>(k)]);
+    }
+    r.krylov_rounding_error = sweep.rounding_error_estimate;
+    if (!(sweep.rounding_error_estimate <= options.krylov_tolerance)) {
+      std::ostringstream s;
+      s << "the stiffness is too ill-conditioned for the Krylov sweep (round-off floor eps cond(K - sigma0 M) = "
+        << sweep.rounding_error_estimate << " > tolerance " << options.krylov_tolerance
+        << "): every frequency was solved directly, whose relative errors can reach the same order";
+      r.warnings.push_back(s.str());
+    } else if (!direct.empty()) {
+      std::ostringstream s;
+      s << direct.size() << " of " << freq_hz.size() << " frequencies were not certified by the Krylov basis ("
+        << sweep.basis_size << " columns, relative error tolerance " << options.krylov_tolerance
+        << ") and were solved directly, the first at " << freq_hz(direct.front()) << " Hz";
+      r.warnings.push_back(s.str());
+    }
+  } else {
+    for (Eigen::Index k = 0; k < freq_hz.size(); ++k) direct.push_back(k);
+  }
+  std::vector<double> singular_hz;
+  direct_solves(model, dynamic, freq_hz, direct, options, r, singular_hz);
+  if (r.direct_frequencies == 0) r.min_rcond = r.min_rcond_freq_hz = std::numeric_limits<double>::quiet_NaN();
   if (!singular_hz.empty()) {
     std::ostringstream s;
     s << singular_hz.size() << " frequenc" << (singular_hz.size() == 1 ? "y" : "ies")
