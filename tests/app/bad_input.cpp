@@ -19,8 +19,8 @@ namespace {
 /// Lines of a valid log "t,u,y" (header + rows), from the 4th-order test plant.
 std::vector<std::string> valid_log_lines(Eigen::Index rows) {
   const StateSpace plant = four_mode_plant();
-  const Eigen::MatrixXd u = gaussian(rows, 1, 5, 1.0);
-  const Eigen::MatrixXd y = simulate(plant, u) + gaussian(rows, 1, 6, 0.01);
+  const Eigen::MatrixXd u = white_noise(rows, 1, 5, 1.0);
+  const Eigen::MatrixXd y = simulate(plant, u) + white_noise(rows, 1, 6, 0.01);
   Eigen::MatrixXd table(rows, 3);
   table.col(0) = Eigen::VectorXd::LinSpaced(rows, 0.0, static_cast<double>(rows - 1)) * 0.001;
   table.col(1) = u;

@@ -48,7 +48,7 @@ TEST(CompareApp, PredictWithoutKalmanGainIsAnError) {
   TempDir dir;
   const StateSpace plant = four_mode_plant();
   write_model(dir / "m.json", plant);  // no K
-  const Eigen::MatrixXd u = gaussian(500, 1, 1, 1.0);
+  const Eigen::MatrixXd u = white_noise(500, 1, 1, 1.0);
   write_siso_log(dir / "log.csv", u, simulate(plant, u));
   const CliResult r = run_cli({"compare", dir / "m.json", dir / "log.csv", "--predict", "1"});
   EXPECT_EQ(r.exit_code, 2) << describe(r);
@@ -63,7 +63,7 @@ TEST(CompareApp, ExactDataWithOffsetsAndInitialState) {
   x0 << 2.0, 1.0, -1.0, 0.5;
   const Eigen::VectorXd in_off = Eigen::VectorXd::Constant(1, 1.25), out_off = Eigen::VectorXd::Constant(1, 7.0);
   write_model(dir / "m.json", plant, {}, in_off, out_off, x0);
-  const Eigen::MatrixXd u = gaussian(2000, 1, 4, 1.0);
+  const Eigen::MatrixXd u = white_noise(2000, 1, 4, 1.0);
   const Eigen::MatrixXd y = (simulate(plant, u, x0).array() + 7.0).matrix();
   write_siso_log(dir / "log.csv", (u.array() + 1.25).matrix(), y);
 
@@ -81,7 +81,7 @@ TEST(CompareApp, ChannelCountMustMatchTheModel) {
   TempDir dir;
   const StateSpace plant = four_mode_plant();
   write_model(dir / "m.json", plant);
-  const Eigen::MatrixXd u = gaussian(300, 1, 1, 1.0);
+  const Eigen::MatrixXd u = white_noise(300, 1, 1, 1.0);
   write_siso_log(dir / "log.csv", u, simulate(plant, u));
   const CliResult r = run_cli({"compare", dir / "m.json", dir / "log.csv", "--outputs", "y,u"});
   EXPECT_EQ(r.exit_code, 2) << describe(r);

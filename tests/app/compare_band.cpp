@@ -15,8 +15,8 @@ using namespace sysid::test;
 namespace {
 
 void write_log(const std::string& path, const StateSpace& plant, Eigen::Index n, std::uint64_t seed) {
-  const Eigen::MatrixXd u = gaussian(n, 1, seed, 1.0);
-  const Eigen::MatrixXd y = simulate(plant, u) + gaussian(n, 1, seed + 1, 0.05);
+  const Eigen::MatrixXd u = white_noise(n, 1, seed, 1.0);
+  const Eigen::MatrixXd y = simulate(plant, u) + white_noise(n, 1, seed + 1, 0.05);
   Eigen::MatrixXd table(n, 3);
   table << Eigen::VectorXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) * plant.Ts, u, y;
   write_csv(path, {"t", "u", "y"}, table);

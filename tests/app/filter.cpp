@@ -22,7 +22,7 @@ namespace {
 /// Par2-like log at 2 kHz: t, u, y, and an untouched column "temp".
 CsvTable write_log(const std::string& path, Eigen::Index n) {
   Eigen::MatrixXd table(n, 4);
-  table << Eigen::VectorXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) / 2000.0, gaussian(n, 3, 21, 1.0);
+  table << Eigen::VectorXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) / 2000.0, white_noise(n, 3, 21, 1.0);
   write_csv(path, {"t", "u", "y", "temp"}, table);
   return read_csv(path);
 }

@@ -20,9 +20,9 @@ namespace {
 /// Log with time column t, inputs u (white) and outputs y = filter(u) + noise.
 void write_filter_log(const std::string& path, Eigen::Index n, std::uint64_t seed) {
   const double fs = 1000.0;
-  const Eigen::MatrixXd u = gaussian(n, 1, seed, 1.0);
+  const Eigen::MatrixXd u = white_noise(n, 1, seed, 1.0);
   const SecondOrderSections f = butterworth(4, BandType::lowpass, 100.0, 0.0, fs);
-  const Eigen::MatrixXd y = sos_filter(f, u) + gaussian(n, 1, seed + 1, 0.05);
+  const Eigen::MatrixXd y = sos_filter(f, u) + white_noise(n, 1, seed + 1, 0.05);
   Eigen::MatrixXd table(n, 3);
   table << Eigen::VectorXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) / fs, u, y;
   write_csv(path, {"t", "u", "y"}, table);
@@ -76,10 +76,10 @@ TEST(FrfApp, KnownFilterInsideTheConfidenceBounds) {
 TEST(FrfApp, MimoColumnsPerOutputInputPair) {
   TempDir dir;
   const Eigen::Index n = 8000;
-  const Eigen::MatrixXd u = gaussian(n, 2, 7, 1.0);
+  const Eigen::MatrixXd u = white_noise(n, 2, 7, 1.0);
   Eigen::MatrixXd table(n, 5);
   table << Eigen::VectorXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) * 0.001, u, 2.0 * u.col(0) - u.col(1),
-      0.5 * u.col(1) + gaussian(n, 1, 9, 0.01);
+      0.5 * u.col(1) + white_noise(n, 1, 9, 0.01);
   write_csv(dir / "log.csv", {"t", "a", "b", "p", "q"}, table);
   const CliResult r =
       run_cli({"frf", dir / "log.csv", "--inputs", "a,b", "--outputs", "p,q", "--nfft", "256", "--out", dir / "frf.csv"});

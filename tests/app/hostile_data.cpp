@@ -53,7 +53,7 @@ struct Log {
 Log simulate(const Plant& p, std::vector<Eigen::VectorXd> u, double noise = 1e-3, std::uint64_t seed = 7) {
   const Eigen::Index n = u.front().size();
   Eigen::VectorXd y = Eigen::VectorXd::Zero(n);
-  const Eigen::MatrixXd e = gaussian(n, 1, seed, noise);
+  const Eigen::MatrixXd e = white_noise(n, 1, seed, noise);
   Eigen::VectorXd clean = Eigen::VectorXd::Zero(n);
   for (Eigen::Index t = 2; t < n; ++t)
     clean(t) = p.a1() * clean(t - 1) + p.a2() * clean(t - 2) + p.b1 * u[0](t - 1) + p.b2 * u[0](t - 2);
@@ -74,7 +74,7 @@ void write_log(const std::string& path, const Log& log, double ts = 1e-3) {
   }
 }
 
-Eigen::VectorXd white(Eigen::Index n, std::uint64_t seed) { return gaussian(n, 1, seed, 1.0).col(0); }
+Eigen::VectorXd white(Eigen::Index n, std::uint64_t seed) { return white_noise(n, 1, seed, 1.0).col(0); }
 
 Eigen::VectorXd sine(Eigen::Index n, double cycles_per_sample) {
   Eigen::VectorXd x(n);
@@ -152,7 +152,7 @@ TEST_F(HostileData, SingleSineInputIsNamedAsNotPersistentlyExciting) {
 TEST_F(HostileData, ConstantInputIsAClearErrorOrWarning) {
   const std::string log = tmp / "constant.csv";
   Log data = simulate(resonant_plant(), {Eigen::VectorXd::Constant(n, 1.5)});
-  data.y = gaussian(n, 1, 3, 1e-2).col(0);  // nothing but noise at the output
+  data.y = white_noise(n, 1, 3, 1e-2).col(0);  // nothing but noise at the output
   write_log(log, data);
   for (const Verb& v : input_verbs()) {
     const std::string out = tmp / (v.name + ".json");

@@ -31,7 +31,7 @@ void make_log(const TempDir& dir, const std::string& stem, int seed, double nois
   const Eigen::VectorXd t = csv_column(u_csv, "t"), u = csv_column(u_csv, "u");
   Eigen::VectorXd y = csv_column(y_csv, "y");
   const double rms = std::sqrt(y.squaredNorm() / static_cast<double>(y.size()));
-  y += gaussian(y.size(), 1, static_cast<std::uint64_t>(1000 + seed), noise * rms).col(0);
+  y += white_noise(y.size(), 1, static_cast<std::uint64_t>(1000 + seed), noise * rms).col(0);
   Eigen::MatrixXd table(t.size(), 3);
   table << t, u, y;
   write_csv(dir / (stem + ".csv"), {"t", "u", "y"}, table);

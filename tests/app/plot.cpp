@@ -68,8 +68,8 @@ void expect_valid_png(const std::string& path) {
 /// Log of the 4th-order app-test plant, white input, small output noise.
 void write_plant_log(const std::string& path, Eigen::Index n) {
   const StateSpace plant = four_mode_plant();
-  const Eigen::MatrixXd u = gaussian(n, 1, 4, 1.0);
-  const Eigen::MatrixXd y = simulate(plant, u) + gaussian(n, 1, 5, 0.02);
+  const Eigen::MatrixXd u = white_noise(n, 1, 4, 1.0);
+  const Eigen::MatrixXd y = simulate(plant, u) + white_noise(n, 1, 5, 0.02);
   Eigen::MatrixXd table(n, 3);
   table << Eigen::VectorXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) * plant.Ts, u, y;
   write_csv(path, {"t", "u", "y"}, table);

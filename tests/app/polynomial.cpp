@@ -19,7 +19,7 @@ namespace {
 /// A y = B u(t-1) + C e with A = 1 - 1.5 q^-1 + 0.7 q^-2, B = 1 + 0.5 q^-1, C = 1 - 0.6 q^-1; noise sigma 0.3.
 std::string write_armax_log(const TempDir& dir, const std::string& name, std::uint64_t seed) {
   const Eigen::Index n = 6000;
-  const Eigen::VectorXd u = gaussian(n, 1, seed, 1.0).col(0), e = gaussian(n, 1, seed + 1, 0.3).col(0);
+  const Eigen::VectorXd u = white_noise(n, 1, seed, 1.0).col(0), e = white_noise(n, 1, seed + 1, 0.3).col(0);
   const Eigen::Vector3d a(1.0, -1.5, 0.7);
   const Eigen::VectorXd y = filter_polynomial(Eigen::Vector3d(0.0, 1.0, 0.5), a, u).col(0) +
                             filter_polynomial(Eigen::Vector2d(1.0, -0.6), a, e).col(0);

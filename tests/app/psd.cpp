@@ -19,7 +19,7 @@ TEST(PsdApp, WhiteNoiseLevelWithinItsBounds) {
   const Eigen::Index n = 100000;
   const double fs = 1000.0, sigma = 2.0;
   Eigen::MatrixXd table(n, 3);
-  table << Eigen::VectorXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) / fs, gaussian(n, 2, 5, sigma);
+  table << Eigen::VectorXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) / fs, white_noise(n, 2, 5, sigma);
   write_csv(dir / "log.csv", {"t", "a", "b"}, table);
   const CliResult r = run_cli({"psd", dir / "log.csv", "--columns", "a,b", "--nfft", "1024", "--out", dir / "psd.csv"});
   ASSERT_EQ(r.exit_code, 0) << describe(r);
@@ -50,7 +50,7 @@ TEST(PsdApp, OutputsIsAnAliasAndBadInputLeavesNoFile) {
   TempDir dir;
   const Eigen::Index n = 500;
   Eigen::MatrixXd table(n, 2);
-  table << Eigen::VectorXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) * 0.01, gaussian(n, 1, 1, 1.0);
+  table << Eigen::VectorXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) * 0.01, white_noise(n, 1, 1, 1.0);
   write_csv(dir / "log.csv", {"t", "y"}, table);
   const std::string out = dir / "psd.csv";
   CliResult r = run_cli({"psd", dir / "log.csv", "--outputs", "y", "--nfft", "128", "--out", out});
@@ -78,7 +78,7 @@ TEST(PsdApp, ModelSpectrumOfTheTrueModelSitsOnTheEstimate) {
   Eigen::MatrixXd K = Eigen::MatrixXd::Zero(4, 1);
   K << 0.05, 0.02, -0.03, 0.04;
   const Eigen::Index n = 60000;
-  const Eigen::MatrixXd u = gaussian(n, 1, 3, 1.0), e = gaussian(n, 1, 4, 0.05);
+  const Eigen::MatrixXd u = white_noise(n, 1, 3, 1.0), e = white_noise(n, 1, 4, 0.05);
   Eigen::MatrixXd ue(n, 2);
   ue << u, e;
   const StateSpace with_noise(plant.A, (Eigen::MatrixXd(4, 2) << plant.B, K).finished(), plant.C,
@@ -116,7 +116,7 @@ TEST(PsdApp, ModelWithoutASpectrumOrItsChannelsIsRefused) {
   TempDir dir;
   const Eigen::Index n = 4000;
   Eigen::MatrixXd table(n, 3);
-  table << Eigen::VectorXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) * 0.001, gaussian(n, 2, 9, 1.0);
+  table << Eigen::VectorXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) * 0.001, white_noise(n, 2, 9, 1.0);
   write_csv(dir / "log.csv", {"t", "u", "y"}, table);
   // An input-free model with no disturbance model has no spectrum.
   StateSpace empty(Eigen::MatrixXd::Constant(1, 1, 0.5), Eigen::MatrixXd::Zero(1, 0), Eigen::MatrixXd::Ones(1, 1),

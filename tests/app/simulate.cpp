@@ -39,7 +39,7 @@ TEST(SimulateApp, MatchesTheLibraryWithOffsetsAndKeepsTheTimeColumn) {
   const StateSpace plant = four_mode_plant();
   const Eigen::VectorXd in_off = Eigen::VectorXd::Constant(1, 0.75), out_off = Eigen::VectorXd::Constant(1, -4.0);
   write_model(dir / "m.json", plant, {}, in_off, out_off);
-  const Eigen::MatrixXd u = gaussian(1500, 1, 1, 1.0);
+  const Eigen::MatrixXd u = white_noise(1500, 1, 1, 1.0);
   write_log(dir / "log.csv", {"u"}, u);
   const CliResult r = run_cli({"simulate", dir / "m.json", dir / "log.csv", "--out", dir / "sim.csv"});
   ASSERT_EQ(r.exit_code, 0) << describe(r);
@@ -61,7 +61,7 @@ TEST(SimulateApp, MimoColumnsAreNamedAsTheModelOutputsAndInputsMapByName) {
   sys.input_names = {"force", "torque"};
   sys.output_names = {"acc1", "acc2", "acc3"};
   write_model(dir / "m.json", sys);
-  const Eigen::MatrixXd u = gaussian(800, 2, 3, 1.0);
+  const Eigen::MatrixXd u = white_noise(800, 2, 3, 1.0);
   // The log has the columns in another order and under other names.
   Eigen::MatrixXd cols(800, 3);
   cols << u.col(1), Eigen::VectorXd::Zero(800), u.col(0);
@@ -85,7 +85,7 @@ TEST(SimulateApp, InitialStateZeroModelAndEstimate) {
   Eigen::VectorXd x0(4);
   x0 << 3.0, -1.0, 2.0, 0.5;
   write_model(dir / "m.json", plant, {}, {}, {}, x0);
-  const Eigen::MatrixXd u = gaussian(1000, 1, 8, 1.0);
+  const Eigen::MatrixXd u = white_noise(1000, 1, 8, 1.0);
   const Eigen::MatrixXd y = simulate(plant, u, x0);
   Eigen::MatrixXd cols(1000, 2);
   cols << u, y;
@@ -132,7 +132,7 @@ TEST(SimulateApp, PolynomialModelFilesRunThroughTheirStateSpace) {
 TEST(SimulateApp, SampleTimeMismatchIsAnError) {
   TempDir dir;
   write_model(dir / "m.json", four_mode_plant());  // Ts = 0.001
-  write_log(dir / "log.csv", {"u"}, gaussian(100, 1, 1, 1.0), /*with_time=*/false);
+  write_log(dir / "log.csv", {"u"}, white_noise(100, 1, 1, 1.0), /*with_time=*/false);
   const CliResult r = run_cli({"simulate", dir / "m.json", dir / "log.csv", "--ts", "0.002", "--out", dir / "sim.csv"});
   EXPECT_EQ(r.exit_code, 2) << describe(r);
   EXPECT_NE(r.err.find("sample time"), std::string::npos) << r.err;

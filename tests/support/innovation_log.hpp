@@ -32,8 +32,8 @@ inline InnovationLog innovation_log(const StateSpace& plant, Eigen::Index N, dou
   EXPECT_EQ(kf.status, KalmanFilterResult::Status::converged);
   InnovationLog d;
   d.K = kf.K;
-  d.u = gaussian(N, 1, seed, 1.0);
-  const Eigen::MatrixXd e = gaussian(N, 1, seed + 1, sigma);
+  d.u = white_noise(N, 1, seed, 1.0);
+  const Eigen::MatrixXd e = white_noise(N, 1, seed + 1, sigma);
   Eigen::MatrixXd Bx(n, 2), Dx(1, 2), ue(N, 2);
   Bx << plant.B, d.K;
   Dx << plant.D, 1.0;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <complex>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <random>
@@ -23,6 +24,13 @@ inline Eigen::MatrixXd randn(std::mt19937_64& rng, Eigen::Index r, Eigen::Index 
   for (Eigen::Index j = 0; j < c; ++j)
     for (Eigen::Index i = 0; i < r; ++i) m(i, j) = g(rng);
   return m;
+}
+
+/// n x cols Gaussian white noise of standard deviation sigma, seeded; column by
+/// column, the same draws as std::normal_distribution(0, sigma) on mt19937_64(seed).
+inline Eigen::MatrixXd white_noise(Eigen::Index n, Eigen::Index cols, std::uint64_t seed, double sigma = 1.0) {
+  std::mt19937_64 rng(seed);
+  return sigma * randn(rng, n, cols);
 }
 
 /// Random similarity with condition number <= e^1.4 ~ 4: Q1 diag(e^u) Q2 with

@@ -11,6 +11,8 @@
 #include <random>
 #include <vector>
 
+#include "random_matrices.hpp"
+
 namespace sysid::test {
 
 /// Random stable discrete-time MIMO system with lightly damped modes at given
@@ -40,15 +42,6 @@ inline StateSpace random_modal_system(int modes, int inputs, int outputs, std::u
   if (!feedthrough) d.setZero();
   const Eigen::MatrixXd ti = t.inverse();
   return StateSpace(t * a * ti, t * b, c * ti, d, 1.0);
-}
-
-inline Eigen::MatrixXd white_noise(Eigen::Index n, Eigen::Index cols, std::uint64_t seed, double sigma = 1.0) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g(0.0, sigma);
-  Eigen::MatrixXd x(n, cols);
-  for (Eigen::Index c = 0; c < cols; ++c)
-    for (Eigen::Index r = 0; r < n; ++r) x(r, c) = g(rng);
-  return x;
 }
 
 /// Discrete modal system with sample time Ts: one 2x2 real block per mode with

@@ -28,6 +28,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "random_matrices.hpp"
+
 namespace sysid::test {
 
 struct CliResult {
@@ -203,16 +205,6 @@ inline void write_model(const std::string& path, const StateSpace& sys, const Ei
   f.output_offset = output_offset;
   f.x0 = x0;
   write_model_json(path, f);
-}
-
-/// Gaussian white noise, seeded.
-inline Eigen::MatrixXd gaussian(Eigen::Index rows, Eigen::Index cols, std::uint64_t seed, double sigma) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g(0.0, sigma);
-  Eigen::MatrixXd x(rows, cols);
-  for (Eigen::Index c = 0; c < cols; ++c)
-    for (Eigen::Index r = 0; r < rows; ++r) x(r, c) = g(rng);
-  return x;
 }
 
 /// Column `name` of a CSV file (read with the library's reader).

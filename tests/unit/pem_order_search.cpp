@@ -11,19 +11,13 @@
 #include <random>
 #include <set>
 
+#include "random_matrices.hpp"
+
 namespace test_unit_pem_order_search {
 
 using namespace sysid;
 
 namespace {
-
-Eigen::VectorXd gaussian(Eigen::Index n, std::uint64_t seed, double sigma) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> d(0.0, sigma);
-  Eigen::VectorXd v(n);
-  for (Eigen::Index k = 0; k < n; ++k) v(k) = d(rng);
-  return v;
-}
 
 /// AR(4) with two resonances: poles 0.95 e^{+-0.3j}, 0.9 e^{+-1.2j}.
 IoData ar4_data(std::uint64_t seed) {
@@ -32,14 +26,14 @@ IoData ar4_data(std::uint64_t seed) {
   const Eigen::Vector3d p1(1.0, -2 * r1 * std::cos(w1), r1 * r1), p2(1.0, -2 * r2 * std::cos(w2), r2 * r2);
   a << 1.0, p1(1) + p2(1), p1(2) + p1(1) * p2(1) + p2(2), p1(1) * p2(2) + p1(2) * p2(1), p1(2) * p2(2);
   const Eigen::Index n = 8000;
-  const Eigen::VectorXd y = filter_polynomial(Eigen::VectorXd::Ones(1), a, gaussian(n, seed, 1.0)).col(0);
+  const Eigen::VectorXd y = filter_polynomial(Eigen::VectorXd::Ones(1), a, sysid::test::white_noise(n, 1, seed)).col(0);
   return IoData(Eigen::MatrixXd(n, 0), y, 1.0);
 }
 
 /// ARX(2,2), nk 1: A = 1 - 1.5 q^-1 + 0.7 q^-2, B = 1 + 0.5 q^-1.
 IoData arx_data(std::uint64_t seed) {
   const Eigen::Index n = 6000;
-  const Eigen::VectorXd u = gaussian(n, seed, 1.0), e = gaussian(n, seed + 1, 0.3);
+  const Eigen::VectorXd u = sysid::test::white_noise(n, 1, seed).col(0), e = sysid::test::white_noise(n, 1, seed + 1, 0.3).col(0);
   const Eigen::Vector3d a(1.0, -1.5, 0.7);
   const Eigen::VectorXd y = filter_polynomial(Eigen::Vector3d(0.0, 1.0, 0.5), a, u).col(0) +
                             filter_polynomial(Eigen::VectorXd::Ones(1), a, e).col(0);

@@ -20,15 +20,6 @@ namespace {
 using sysid::BandType;
 using sysid::test::kPi;
 
-Eigen::MatrixXd gaussian(Eigen::Index n, Eigen::Index m, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g(0.0, 1.0);
-  Eigen::MatrixXd x(n, m);
-  for (Eigen::Index j = 0; j < m; ++j)
-    for (Eigen::Index i = 0; i < n; ++i) x(i, j) = g(rng);
-  return x;
-}
-
 std::vector<double> convolve(const std::vector<double>& p, const std::vector<double>& q) {
   std::vector<double> r(p.size() + q.size() - 1, 0.0);
   for (std::size_t i = 0; i < p.size(); ++i)
@@ -60,7 +51,7 @@ TEST(SignalSosFilter, MatchesExpandedDifferenceEquation) {
   const std::vector<sysid::SecondOrderSections> filters = {
       sysid::butterworth(4, BandType::lowpass, 100, 0, 1000), sysid::butterworth(5, BandType::highpass, 50, 0, 1000),
       sysid::butterworth(3, BandType::bandpass, 80, 200, 1000), sysid::butterworth(1, BandType::lowpass, 10, 0, 1000)};
-  const Eigen::MatrixXd x = gaussian(2000, 3, 11);
+  const Eigen::MatrixXd x = sysid::test::white_noise(2000, 3, 11);
   for (const auto& f : filters) {
     const Eigen::MatrixXd y = sysid::sos_filter(f, x);
     ASSERT_EQ(y.rows(), x.rows());
@@ -88,7 +79,7 @@ TEST(SignalSosFilter, ImpulseResponseEqualsStateSpaceMarkovParameters) {
 
 TEST(SignalSosFilter, ColumnsAreFilteredIndependently) {
   const auto f = sysid::butterworth(3, BandType::bandpass, 20, 60, 500);
-  const Eigen::MatrixXd x = gaussian(500, 3, 5);
+  const Eigen::MatrixXd x = sysid::test::white_noise(500, 3, 5);
   const Eigen::MatrixXd y = sysid::sos_filter(f, x);
   const Eigen::MatrixXd z = sysid::filtfilt(f, x);
   for (Eigen::Index c = 0; c < 3; ++c) {

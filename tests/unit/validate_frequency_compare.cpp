@@ -9,6 +9,8 @@
 #include <numbers>
 #include <random>
 
+#include "random_matrices.hpp"
+
 namespace test_unit_validate_frequency_compare {
 
 using namespace sysid;
@@ -48,18 +50,10 @@ StateSpace mimo_plant() {
   return StateSpace(A, B, C, Eigen::MatrixXd::Zero(2, 2), Ts);
 }
 
-Eigen::MatrixXd gaussian(Eigen::Index n, Eigen::Index c, std::uint64_t seed, double sigma) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g(0.0, sigma);
-  Eigen::MatrixXd x(n, c);
-  for (Eigen::Index i = 0; i < x.size(); ++i) x.data()[i] = g(rng);
-  return x;
-}
-
 /// White-noise input, output with white measurement noise of the given level.
 IoData record(const StateSpace& sys, Eigen::Index n, double noise, std::uint64_t seed) {
-  const Eigen::MatrixXd u = gaussian(n, sys.inputs(), seed, 1.0);
-  const Eigen::MatrixXd y = simulate(sys, u) + gaussian(n, sys.outputs(), seed + 1, noise);
+  const Eigen::MatrixXd u = sysid::test::white_noise(n, sys.inputs(), seed, 1.0);
+  const Eigen::MatrixXd y = simulate(sys, u) + sysid::test::white_noise(n, sys.outputs(), seed + 1, noise);
   return IoData(u, y, sys.Ts);
 }
 
