@@ -41,17 +41,18 @@
 /// free of the round-off that makes the full residual F - Z V y of a beam or plate
 /// model useless (its stiffness spans 10 or more decades, so round-off in the high
 /// modes swamps ||R||; a normwise backward error is small even when the response
-/// is wrong: both were tried and measured). To it is added the round-off floor
+/// is wrong: both were tried and measured). Beside it stands the round-off floor
 /// eps cond(S), cond(S) = (lambda_max - sigma0) theta_max with lambda_max from a
 /// short power iteration: the solves with S, like any direct solve, are accurate
 /// only to about that (measured: 3e-2 predicted, ~1e-2 found on data/fem's
 /// 3 002-DOF bar, whose direct solves are themselves 4e-4 off a long-double
 /// solve; 5e-11 on the 50 000-DOF membrane of bench/). A frequency is accepted
-/// when the sum, relative to each output entry (entries below 1e-4 of their
-/// input's largest count as that size), is <= tolerance; when the floor alone
-/// exceeds it, the sweep stops at once and leaves everything to the direct solves. The assumption behind rho is why
-/// this is an estimate, not a bound: the tests and the benchmark compare the
-/// accepted responses with direct solves.
+/// when the larger of the two, the truncation estimate taken relative to each
+/// output entry (entries below 1e-4 of their input's largest count as that size),
+/// is <= tolerance; when the floor alone exceeds it, the sweep stops at once and
+/// leaves everything to the direct solves. The assumption behind rho is why this
+/// is an estimate, not a bound: the tests and the benchmark compare the accepted
+/// responses with direct solves.
 ///
 /// The basis grows (by a quarter at a time) while frequencies fail; what is still
 /// unaccepted when the next block would pass max_basis, 0 Hz (where a free
