@@ -99,9 +99,8 @@ class LanczosBasis {
       m_w.noalias() -= basis() * c;
       coefficients += c;
     }
-    const Eigen::MatrixXd sym = coefficients;
-    m_h.block(0, m_last, m_p, m_p - m_last) = sym;
-    m_h.block(m_last, 0, m_p - m_last, m_p) = sym.transpose();
+    m_h.block(0, m_last, m_p, m_p - m_last) = coefficients;
+    m_h.block(m_last, 0, m_p - m_last, m_p) = coefficients.transpose();
     // The diagonal block twice written: keep it exactly symmetric.
     auto diagonal = m_h.block(m_last, m_last, m_p - m_last, m_p - m_last);
     diagonal = (0.5 * (diagonal + diagonal.transpose())).eval();
@@ -170,8 +169,7 @@ struct PencilCoefficients {
 };
 PencilCoefficients pencil_coefficients(const SecondOrderModel& model, double omega) {
   const bool rayleigh = model.damping.kind == DampingKind::rayleigh;
-  const double eta = model.damping.kind == DampingKind::modal_ratio ? 2.0 * model.damping.ratio : 0.0;
-  return {Complex(1.0, omega * (rayleigh ? model.damping.beta : 0.0) + eta),
+  return {Complex(1.0, omega * (rayleigh ? model.damping.beta : 0.0) + model.structural_loss_factor()),
           Complex(omega * omega, -omega * (rayleigh ? model.damping.alpha : 0.0))};
 }
 

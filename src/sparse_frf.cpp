@@ -43,13 +43,13 @@ Eigen::VectorXd values_on_pattern(const SparseMatrix& pattern, const SparseMatri
 /// C (C the effective damping matrix, eta = 2 zeta for a modal ratio): every
 /// Z(omega) has that pattern, and its values are O(nnz) from three aligned arrays.
 struct DynamicStiffness {
+  SparseMatrix damping;  ///< C itself, for the from-scratch assembly
   SparseMatrix pattern;
   Eigen::VectorXd k, m, c;
   double loss_factor = 0.0;
 
-  explicit DynamicStiffness(const SecondOrderModel& model) {
-    const SparseMatrix damping = model.effective_damping_matrix();
-    loss_factor = model.damping.kind == DampingKind::modal_ratio ? 2.0 * model.damping.ratio : 0.0;
+  explicit DynamicStiffness(const SecondOrderModel& model)
+      : damping(model.effective_damping_matrix()), loss_factor(model.structural_loss_factor()) {
     pattern = model.stiffness.cwiseAbs() + model.mass.cwiseAbs() + damping.cwiseAbs();
     pattern.makeCompressed();
     k = values_on_pattern(pattern, model.stiffness);
@@ -112,12 +112,12 @@ void set_response(const SecondOrderModel& model, double w, const Eigen::MatrixXc
 
 /// UMFPACK solves at the frequencies freq_hz(which[...]): H, the counters, rcond;
 /// singular frequencies get NaN and are appended to `singular_hz`.
-void direct_solves(const SecondOrderModel& model, const DynamicStiffness& dynamic, const Eigen::VectorXd& freq_hz,
-                   const std::vector<Eigen::Index>& which, const SparseFrfOptions& options, SparseFrfResult& r,
-                   std::vector<double>& singular_hz) {
+void direct_solves(const SecondOrderModel& model, const Eigen::VectorXd& freq_hz, const std::vector<Eigen::Index>& which,
+                   const SparseFrfOptions& options, SparseFrfResult& r, std::vector<double>& singular_hz) {
+  if (which.empty()) return;
   const Eigen::Index n = model.dofs(), m = static_cast<Eigen::Index>(model.inputs.size()),
                      l = static_cast<Eigen::Index>(model.outputs.size());
-  const SparseMatrix c = model.effective_damping_matrix();
+  const DynamicStiffness dynamic(model);
   const double eta = dynamic.loss_factor;
   ComplexPattern z = pattern_of(dynamic.pattern.cast<Complex>());
   const auto nnz = static_cast<std::size_t>(dynamic.pattern.nonZeros());
@@ -144,7 +144,7 @@ void direct_solves(const SecondOrderModel& model, const DynamicStiffness& dynami
     } else {
       // From scratch: assemble Z with sparse sums and analyse its pattern anew.
       const Eigen::SparseMatrix<Complex> zk = model.stiffness.cast<Complex>() * Complex(1.0, eta) -
-                                              (w * w) * model.mass.cast<Complex>() + Complex(0.0, w) * c.cast<Complex>();
+                                              (w * w) * model.mass.cast<Complex>() + Complex(0.0, w) * dynamic.damping.cast<Complex>();
       z = pattern_of(zk);
       factors.free_symbolic();
     }
@@ -229,11 +229,10 @@ SparseFrfResult sparse_frf(const SecondOrderModel& model, const Eigen::VectorXd&
   r.min_rcond = std::numeric_limits<double>::infinity();
   r.method = resolve_method(model, freq_hz, options);
 
-  const DynamicStiffness dynamic(model);
   // Modal damping ratio as structural damping: K (1 + j eta), eta = 2 zeta (header).
-  if (dynamic.loss_factor > 0.0)
+  if (model.structural_loss_factor() > 0.0)
     r.warnings.push_back("modal damping ratio " + std::to_string(model.damping.ratio) +
-                         " applied as structural damping K (1 + 2j zeta) in the direct solve: exact at each resonance, "
+                         " applied as structural damping K (1 + 2j zeta) in the frequency-domain solve: exact at each resonance, "
                          "not viscous away from it");
 
   std::vector<Eigen::Index> direct;
@@ -270,7 +269,7 @@ SparseFrfResult sparse_frf(const SecondOrderModel& model, const Eigen::VectorXd&
     for (Eigen::Index k = 0; k < freq_hz.size(); ++k) direct.push_back(k);
   }
   std::vector<double> singular_hz;
-  direct_solves(model, dynamic, freq_hz, direct, options, r, singular_hz);
+  direct_solves(model, freq_hz, direct, options, r, singular_hz);
   if (r.direct_frequencies == 0) r.min_rcond = r.min_rcond_freq_hz = std::numeric_limits<double>::quiet_NaN();
   if (!singular_hz.empty()) {
     std::ostringstream s;

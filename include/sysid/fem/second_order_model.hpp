@@ -83,6 +83,13 @@ struct SecondOrderModel {
   /// (all-zero) matrix for none and modal_ratio.
   Eigen::SparseMatrix<double> effective_damping_matrix() const;
 
+  /// The structural loss factor eta that stands in for a modal damping ratio in
+  /// frequency-domain solves, Z = K (1 + j eta) - omega^2 M with eta = 2 zeta
+  /// (file comment); 0 for the other damping kinds.
+  double structural_loss_factor() const {
+    return damping.kind == DampingKind::modal_ratio ? 2.0 * damping.ratio : 0.0;
+  }
+
   /// Throws std::invalid_argument naming the first violation: matrix sizes differ
   /// or are not square, a matrix is not symmetric (relative tolerance 1e-10 of its
   /// largest entry), a non-finite entry, a DOF outside 0..n-1, no inputs or no
