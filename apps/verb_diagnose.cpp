@@ -24,6 +24,9 @@ struct DiagnoseArgs {
   int max_findings = 4;
   double significance = 0.01;
   int substeps = 0;
+  bool refit_nominal = false;
+  double fit_fraction = 0.5, selection_fraction = 0.2;
+  Eigen::Index min_segment = 200;
 };
 
 std::string describe_finding(std::size_t rank, const Finding& f) {
@@ -150,6 +153,10 @@ void run_diagnose(const DiagnoseArgs& a) {
   o.max_findings = a.max_findings;
   o.significance = a.significance;
   o.detection.feedback_substeps = a.substeps;
+  o.refit_nominal = a.refit_nominal;
+  o.fit_fraction = a.fit_fraction;
+  o.selection_fraction = a.selection_fraction;
+  o.min_segment_samples = a.min_segment;
   DiagnoseReport report;
   try {
     report = diagnose(nominal, e.u, e.y, o);
@@ -234,10 +241,25 @@ Verb register_diagnose(CLI::App& app) {
                   "feedthrough D, else 1 with the feedthrough solved implicitly)")
       ->capture_default_str()
       ->check(CLI::Range(0, 64));
+  cmd->add_flag("--refit-nominal", args->refit_nominal,
+               "refit the nominal's linear dynamics together with each candidate (for a nominal identified from this "
+               "machine, whose poles hold a compromise of the nonlinearity); candidates are then judged against the "
+               "linear dynamics refitted alone");
+  cmd->add_option("--fit-fraction", args->fit_fraction, "leading part of the record that fits the candidates")
+      ->capture_default_str()
+      ->check(CLI::Range(0.05, 0.9));
+  cmd->add_option("--selection-fraction", args->selection_fraction, "next part, which ranks and accepts them; the rest is held out")
+      ->capture_default_str()
+      ->check(CLI::Range(0.05, 0.9));
+  cmd->add_option("--min-segment", args->min_segment, "fewest samples in each of the three parts")
+      ->capture_default_str()
+      ->check(CLI::Range(50, 1000000000));
   cmd->footer(
       "The record is split in time: the first 50 % fits the candidate physics, the next 20 %\n"
       "ranks and accepts them (a paired test on the simulation errors), the last 30 % is\n"
-      "held out from every fit and gives fit_before / fit_after.\n"
+      "held out from every fit and gives fit_before / fit_after (--fit-fraction,\n"
+      "--selection-fraction). A record whose effect shows in few episodes needs one in each\n"
+      "of the first two parts.\n"
       "Example:\n"
       "  sysid diagnose --model nominal.json log.csv --inputs u --outputs y --json report.json --out augmented.json");
   add_hold_option(*cmd);

@@ -47,7 +47,9 @@ void check_parameters(const PhysicsBlock& b, double Ts) {
   } else if (is_kind(b, "backlash") || is_kind(b, "deadzone")) {
     require(b.param("width") >= 0.0, b, "width", ">= 0");
   } else if (is_kind(b, "saturation")) {
-    require(b.param("limit") > 0.0, b, "limit", "> 0");
+    require(b.param("limit") > 0.0 || b.param("storage_pole") > 0.0, b, "limit", "> 0 (an amplifier's +-limit)");
+    require(b.param("storage_pole") >= 0.0 && b.param("storage_pole") < 1.0, b, "storage_pole", "in [0, 1)");
+    require(b.param("spill") >= 0.0 && b.param("spill") <= 1.0, b, "spill", "in [0, 1]");
   } else if (is_kind(b, "periodic_disturbance")) {
     require(b.param("freq_hz") > 0.0, b, "freq_hz", "> 0");
   }
@@ -55,7 +57,39 @@ void check_parameters(const PhysicsBlock& b, double Ts) {
 
 // ---- actuator stage ---------------------------------------------------------
 
-void apply_saturation(double limit, Eigen::Ref<Eigen::VectorXd> w) { w = w.cwiseMax(-limit).cwiseMin(limit); }
+/// An amplifier clipping at +-limit (storage_pole a = 0), or the overflow of a
+/// first-order store the input fills (a tank; 0 < a < 1). The store's level, in
+/// input units (unit DC gain),
+///   v[k+1] = min(a v[k] + (1 - a) w[k], limit),
+/// and what flows on to the plant is the level the next stage sees,
+///   z[k+1] = v[k+1] + spill * overflow[k] / (1 - a),
+/// overflow = the part of a v + (1 - a) w above the limit, of which the fraction
+/// `spill` reaches the next stage at once (1 / (1 - a) turns an overflowing
+/// volume into the level that would carry it out in one step; the rest is lost).
+/// The nominal holds the store's own dynamics (its pole a, e.g. the upper tank
+/// of cascaded tanks), so the block hands it the input that makes that pole
+/// reproduce z exactly: w_out[k] = (z[k+1] - a z[k]) / (1 - a), causal because
+/// z[k+1] depends on w[k] only; below the limit w_out = w. Physics: the overflow
+/// of the upper tank in M. Schoukens, P. Mattsson, T. Wigren and J.P. Noel,
+/// "Cascaded tanks benchmark combining soft and hard nonlinearities", 2016 (part
+/// of the spill falls into the lower tank). The store starts filled to its first
+/// input; it never runs dry (no lower limit).
+void apply_saturation(double limit, double a, double spill, Eigen::Ref<Eigen::VectorXd> w) {
+  if (a == 0.0) {
+    w = w.cwiseMax(-limit).cwiseMin(limit);
+    return;
+  }
+  if (w.size() == 0) return;
+  double level = std::min(w[0], limit), seen = level;
+  for (Eigen::Index k = 0; k < w.size(); ++k) {
+    const double filled = a * level + (1.0 - a) * w[k];
+    const double next_level = std::min(filled, limit);
+    const double next_seen = next_level + spill * (filled - next_level) / (1.0 - a);
+    w[k] = (next_seen - a * seen) / (1.0 - a);
+    level = next_level;
+    seen = next_seen;
+  }
+}
 
 void apply_deadzone(double width, Eigen::Ref<Eigen::VectorXd> w) {
   const double half = 0.5 * width;
@@ -184,7 +218,8 @@ Eigen::MatrixXd actuator_output(const std::vector<PhysicsBlock>& blocks, const E
     for (const auto& b : blocks) {
       if (b.kind != kind) continue;
       auto col = w.col(b.input);
-      if (b.kind == "saturation") apply_saturation(b.param("limit"), col);
+      if (b.kind == "saturation")
+        apply_saturation(b.param("limit"), b.param("storage_pole"), b.param("spill"), col);
       else if (b.kind == "time_delay") apply_delay(b.param("delay_s") / Ts, col);
       else if (b.kind == "deadzone") apply_deadzone(b.param("width"), col);
       else if (b.kind == "backlash") apply_backlash(b.param("width"), col);

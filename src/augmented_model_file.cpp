@@ -99,6 +99,11 @@ AugmentedModel augmented_model_from_file(const ModelFile& file, const std::strin
     if (!j.contains("params") || !j["params"].is_object()) throw DataError(source, 0, 0, where + ".params: expected an object");
     for (const char* name : b.info().parameters) {
       const auto& p = j["params"];
+      double fallback = 0.0;
+      if (!p.contains(name) && optional_parameter_default(b, name, fallback)) {
+        b.params[name] = fallback;
+        continue;
+      }
       if (!p.contains(name)) throw DataError(source, 0, 0, where + ".params: missing '" + std::string(name) + "'");
       if (!p[name].is_number() || !std::isfinite(p[name].get<double>()))
         throw DataError(source, 0, 0, where + ".params." + name + ": expected a finite number");
@@ -198,6 +203,16 @@ nlohmann::json diagnose_report_to_json(const DiagnoseReport& r, double Ts) {
                       {"candidates", considered},
                       {"Ts", Ts},
                       {"warnings", r.warnings}};
+  if (r.nominal_refit.attempted) {
+    auto pole_list = [](const Eigen::VectorXcd& p) {
+      nlohmann::json list = nlohmann::json::array();
+      for (Eigen::Index k = 0; k < p.size(); ++k) list.push_back({p[k].real(), p[k].imag()});
+      return list;
+    };
+    j["nominal_refit"] = {{"applied", r.nominal_refit.applied},
+                          {"poles_before", pole_list(r.nominal_refit.poles_before)},
+                          {"poles_after", pole_list(r.nominal_refit.poles_after)}};
+  }
   return j;
 }
 

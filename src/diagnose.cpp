@@ -6,6 +6,7 @@
 #include <atomic>
 #include <exception>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <thread>
 #include <cmath>
@@ -13,6 +14,7 @@
 #include <stdexcept>
 
 #include "sysid/core/identification_warnings.hpp"
+#include "sysid/core/poles_zeros.hpp"
 #include "sysid/spectral/confidence.hpp"
 #include "sysid/validate/compare.hpp"
 #include "sysid/validate/fit.hpp"
@@ -119,9 +121,11 @@ void check_arguments(const AugmentedModel& nominal, const Eigen::Ref<const Eigen
   s.total = y.rows();
   s.fit = static_cast<Eigen::Index>(std::floor(o.fit_fraction * static_cast<double>(s.total)));
   s.estimation = static_cast<Eigen::Index>(std::floor((o.fit_fraction + o.selection_fraction) * static_cast<double>(s.total)));
+  if (o.min_segment_samples < 50) throw std::invalid_argument("diagnose: need min_segment_samples >= 50");
   const Eigen::Index shortest = std::min({s.fit, s.estimation - s.fit, s.total - s.estimation});
-  if (shortest < 200)
-    throw std::invalid_argument("diagnose: need at least 200 samples in each of the fit, selection and validation segments (have " +
+  if (shortest < o.min_segment_samples)
+    throw std::invalid_argument("diagnose: need at least " + std::to_string(o.min_segment_samples) +
+                                " samples in each of the fit, selection and validation segments (have " +
                                 std::to_string(shortest) + " in the shortest; record has " + std::to_string(s.total) + ")");
 }
 
@@ -200,7 +204,7 @@ std::vector<std::pair<double, double>> explained_windows(const MismatchLocation&
 }  // namespace
 
 std::string finding_summary(const PhysicsBlock& b, const std::vector<std::string>& input_names,
-                            const std::vector<std::string>& output_names) {
+                            const std::vector<std::string>& output_names, double ts) {
   const std::string in = channel_name(input_names, b.input, "u"), out = channel_name(output_names, b.output, "y");
   const std::string k = b.kind;
   if (k == "missing_mode")
@@ -229,6 +233,13 @@ std::string finding_summary(const PhysicsBlock& b, const std::vector<std::string
     return "The actuation of " + in + " has play (backlash) of total width " + fixed(b.param("width"), 3) + " (input units).";
   if (k == "deadzone")
     return "The actuation of " + in + " has a dead zone of total width " + fixed(b.param("width"), 3) + " (input units).";
+  if (k == "saturation" && b.param("storage_pole") > 0.0) {
+    // Time constant of the store from its discrete pole: a = exp(-Ts / tau).
+    return "The store that " + in + " fills (a tank or reservoir with a time constant of " +
+           fixed(-ts / std::log(b.param("storage_pole")), 3) + " s) overflows above the level a steady " + in + " of " +
+           fixed(b.param("limit"), 4) + " (input units, from the operating point) would reach; " +
+           fixed(100.0 * b.param("spill"), 3) + " % of the spill flows on to the next stage.";
+  }
   if (k == "saturation")
     return "The actuation of " + in + " saturates at +-" + fixed(b.param("limit"), 4) + " (input units).";
   if (k == "cubic_stiffness")
@@ -265,17 +276,35 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
   if (nominal.input_offset.size()) u.rowwise() -= nominal.input_offset.transpose();
   if (nominal.output_offset.size()) y.rowwise() -= nominal.output_offset.transpose();
 
-  const AugmentedSimulator fast(model, 1, nominal.x0);
+  // The linear core the blocks act on: the nominal, or with refit_nominal its
+  // refit after each acceptance (simulators rebuilt then).
+  StateSpace core = model;
+  Eigen::VectorXd core_x0 = nominal.x0;
   const int substeps = o.detection.feedback_substeps > 0 ? o.detection.feedback_substeps
                                                           : (model.D.cwiseAbs().maxCoeff() > 0.0 ? 1 : 4);
-  const AugmentedSimulator fine(model, substeps, nominal.x0);
-  for (const auto& w : fine.warnings()) report.warnings.push_back(w);
+  std::unique_ptr<AugmentedSimulator> fast, fine;
+  auto build_simulators = [&] {
+    fast = std::make_unique<AugmentedSimulator>(core, 1, core_x0);
+    fine = std::make_unique<AugmentedSimulator>(core, substeps, core_x0);
+  };
+  build_simulators();
+  for (const auto& w : fine->warnings()) report.warnings.push_back(w);
   auto simulator_for = [&](const std::vector<Candidate>& set, const std::vector<PhysicsBlock>& fixed) -> const AugmentedSimulator& {
     bool feedback = std::any_of(fixed.begin(), fixed.end(),
                                 [](const PhysicsBlock& b) { return b.info().stage == BlockStage::plant_feedback; });
     for (const auto& c : set) feedback = feedback || c.substeps > 1;
-    return feedback ? fine : fast;
+    return feedback ? *fine : *fast;
   };
+  // The core and every block refitted together (refit_nominal), on rows [0, rows).
+  auto refit_core = [&](const std::vector<Candidate>& blocks, Eigen::Index rows, int steps) {
+    return refit_linear_core(core, core_x0, nominal.blocks, blocks, u.topRows(rows), y.topRows(rows), rows, steps, o.refit);
+  };
+  auto simulate_refit = [&](const LinearCoreRefitResult& r, int steps, Eigen::Index rows) {
+    return AugmentedSimulator(r.model, steps, r.x0).simulate(combine_blocks(nominal.blocks, r.blocks), u, rows);
+  };
+  report.nominal_refit.attempted = o.refit_nominal;
+  report.nominal_refit.poles_before = poles(model);
+  report.nominal_refit.poles_after = report.nominal_refit.poles_before;
 
   std::vector<PhysicsBlock> base = nominal.blocks;  // blocks already in the model stay
   std::vector<Candidate> accepted;
@@ -283,7 +312,7 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
   // Refits after an acceptance start from good values: the local stage only.
   CandidateFitOptions local_fit = o.fit;
   local_fit.global_evaluations_per_parameter = 0;
-  const Eigen::MatrixXd y_nominal = fine.simulate(base, u);
+  const Eigen::MatrixXd y_nominal = fine->simulate(base, u);
 
   // 1. Locate, on the estimation part only.
   {
@@ -303,7 +332,7 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
     // Candidate frequencies come from the location of the nominal's residual
     // (bands, peaks), computed once.
     DetectionData data;
-    data.simulator = &fine;
+    data.simulator = fine.get();
     data.accepted = fixed;
     data.u = u_fit;
     data.y = y_fit;
@@ -322,13 +351,24 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
     if (tried == 0) break;
     const double level = o.significance / tried;  // Bonferroni over the candidates of the round
     const double t_threshold = normal_quantile(1.0 - level);
+    // With refit_nominal every candidate is fitted together with the linear core,
+    // and judged against the core refitted alone on the same rows: both have seen
+    // the same data, so the test asks whether the physics helps beyond a better
+    // linear fit (the nominal itself may have been identified on the selection
+    // segment, which would favour it).
+    Eigen::MatrixXd reference = current;
+    if (o.refit_nominal) {
+      const LinearCoreRefitResult alone = refit_core(accepted, fit_rows, current_sim.substeps());
+      if (alone.refitted) reference = simulate_refit(alone, current_sim.substeps(), seg.estimation);
+    }
     const double before_fit = mean_fit(y.middleRows(seg.fit, seg.estimation - seg.fit),
-                                       current.middleRows(seg.fit, seg.estimation - seg.fit));
+                                       reference.middleRows(seg.fit, seg.estimation - seg.fit));
     int best = -1;
     double best_score = -std::numeric_limits<double>::infinity();
     // Candidates are independent: fit them on all cores (each thread its own NLopt
     // instance; the simulators are read-only).
     std::vector<JudgedCandidate> judged(candidates.size());
+    std::vector<std::optional<LinearCoreRefitResult>> refits(candidates.size());
     parallel_for(candidates.size(), [&](std::size_t index) {
       const Candidate& cand = candidates[index];
       const AugmentedSimulator& sim = simulator_for({cand}, fixed);
@@ -336,11 +376,21 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
       JudgedCandidate& j = judged[index];
       j.candidate = fitted.fitted.front();
       j.round = round;
-      const std::vector<PhysicsBlock> with = combine_blocks(fixed, fitted.fitted);
-      const Eigen::MatrixXd after = sim.simulate(with, u, seg.estimation);
+      Eigen::MatrixXd after;
+      if (o.refit_nominal) {
+        std::vector<Candidate> all = accepted;
+        all.push_back(j.candidate);
+        LinearCoreRefitResult r = refit_core(all, fit_rows, sim.substeps());
+        if (r.refitted) {
+          after = simulate_refit(r, sim.substeps(), seg.estimation);
+          j.candidate = r.blocks.back();
+          refits[index] = std::move(r);
+        }
+      }
+      if (after.size() == 0) after = sim.simulate(combine_blocks(fixed, fitted.fitted), u, seg.estimation);
       const Eigen::Index sel = seg.estimation - seg.fit;
       j.selection_gain = mean_fit(y.middleRows(seg.fit, sel), after.middleRows(seg.fit, sel)) - before_fit;
-      j.t_statistic = improvement_z(y, current, after, seg.fit, seg.estimation, o.max_correlation_lag);
+      j.t_statistic = improvement_z(y, reference, after, seg.fit, seg.estimation, o.max_correlation_lag);
       j.t_threshold = t_threshold;
     });
     for (std::size_t index = 0; index < judged.size(); ++index) {
@@ -354,16 +404,33 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
     }
     for (const auto& j : judged) report.considered.push_back(j);
     if (best < 0) break;
-    accepted.push_back(judged[best].candidate);
     acceptance.push_back(judged[best]);
-    accepted = fit_candidates(simulator_for(accepted, base), base, accepted, u_fit, y_fit, fit_rows, local_fit).fitted;
+    if (refits[best]) {
+      // The core moves with the blocks (fitted together on the fit segment).
+      core = refits[best]->model;
+      core_x0 = refits[best]->x0;
+      accepted = refits[best]->blocks;
+      build_simulators();
+      report.nominal_refit.applied = true;
+    } else {
+      accepted.push_back(judged[best].candidate);
+      accepted = fit_candidates(simulator_for(accepted, base), base, accepted, u_fit, y_fit, fit_rows, local_fit).fitted;
+    }
   }
 
   // 4. Prove: refit on the whole estimation part, then score on validation.
-  if (!accepted.empty())
+  if (!accepted.empty() && report.nominal_refit.applied) {
+    const LinearCoreRefitResult r = refit_core(accepted, seg.estimation, simulator_for(accepted, base).substeps());
+    core = r.model;
+    core_x0 = r.x0;
+    accepted = r.blocks;
+    build_simulators();
+    report.nominal_refit.poles_after = poles(core);
+  } else if (!accepted.empty()) {
     accepted = fit_candidates(simulator_for(accepted, base), base, accepted, u.topRows(seg.estimation),
                               y.topRows(seg.estimation), seg.estimation, local_fit)
                    .fitted;
+  }
   const Eigen::Index V = seg.total - seg.estimation;
   const auto y_val = y.bottomRows(V);
   std::vector<Candidate> so_far;
@@ -382,7 +449,7 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
     f.t_statistic = acceptance[k].t_statistic;
     f.band_hz = band_of(c.block, report.location);
     f.time_windows_s = explained_windows(report.location, y, y_nominal, previous, next, seg.estimation, Ts);
-    f.summary = finding_summary(c.block, model.input_names, model.output_names);
+    f.summary = finding_summary(c.block, model.input_names, model.output_names, Ts);
     report.findings.push_back(f);
     previous = next;
   }
@@ -402,6 +469,13 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
   report.augmented = nominal;
   report.augmented.blocks = combine_blocks(base, accepted);
   report.augmented.substeps = simulator_for(accepted, base).substeps();
+  if (report.nominal_refit.applied) {
+    report.augmented.nominal = core;
+    report.augmented.x0 = core_x0;
+    report.warnings.push_back(
+        "diagnose: the nominal's linear dynamics were refitted with the findings (refit_nominal); the augmented model "
+        "carries the refitted core, and every finding's fit_after is measured with it");
+  }
   return report;
 }
 
@@ -421,12 +495,9 @@ Eigen::VectorXd fit_from_estimated_state(AugmentedModel& model, const Eigen::Ref
 
 RecordingValidation validate_on_recording(const AugmentedModel& nominal, const AugmentedModel& augmented,
                                           const Eigen::Ref<const Eigen::MatrixXd>& u, const Eigen::Ref<const Eigen::MatrixXd>& y) {
-  const auto same = [](const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
-    return a.rows() == b.rows() && a.cols() == b.cols() && a == b;
-  };
-  if (!same(nominal.nominal.A, augmented.nominal.A) || !same(nominal.nominal.B, augmented.nominal.B) ||
-      !same(nominal.nominal.C, augmented.nominal.C))
-    throw std::invalid_argument("validate_on_recording: the augmented model must extend the nominal one");
+  if (nominal.nominal.inputs() != augmented.nominal.inputs() || nominal.nominal.outputs() != augmented.nominal.outputs() ||
+      nominal.nominal.Ts != augmented.nominal.Ts)
+    throw std::invalid_argument("validate_on_recording: the augmented model must have the nominal's channels and sample time");
   if (u.rows() != y.rows() || u.cols() != nominal.nominal.inputs() || y.cols() != nominal.nominal.outputs() || y.rows() < 1)
     throw std::invalid_argument("validate_on_recording: need u N x " + std::to_string(nominal.nominal.inputs()) + " and y N x " +
                                 std::to_string(nominal.nominal.outputs()) + ", N >= 1");

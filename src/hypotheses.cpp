@@ -236,6 +236,65 @@ Candidate best_as_is(const Context& c, const std::vector<PhysicsBlock>& grid) {
   return best;
 }
 
+/// The nominal's real discrete poles in (0, 1), slowest first: the first-order
+/// stores (tanks, thermal masses) an input could fill.
+std::vector<double> store_poles(const Context& c) {
+  std::vector<double> poles;
+  Eigen::EigenSolver<Eigen::MatrixXd> eig(c.d.simulator->nominal().A, false);
+  if (eig.info() != Eigen::Success) return poles;
+  for (Eigen::Index k = 0; k < eig.eigenvalues().size(); ++k) {
+    const std::complex<double> p = eig.eigenvalues()(k);
+    if (std::abs(p.imag()) <= 1e-12 * std::abs(p) && p.real() > 0.0 && p.real() < 1.0) poles.push_back(p.real());
+  }
+  std::sort(poles.begin(), poles.end(), std::greater<>());
+  return poles;
+}
+
+/// Lowest and highest level of a first-order store (pole a, unit DC gain) filled
+/// by u from equilibrium with its first sample, without overflow.
+std::pair<double, double> store_level_range(const Eigen::VectorXd& u, double a) {
+  double level = u[0], low = level, high = level;
+  for (Eigen::Index k = 0; k < u.size(); ++k) {
+    level = a * level + (1.0 - a) * u[k];
+    low = std::min(low, level);
+    high = std::max(high, level);
+  }
+  return {low, high};
+}
+
+/// saturation of a store (physics_block.hpp): the input fills a first-order store
+/// with one of the nominal's real poles, which overflows above a level. Grid over
+/// the pole (the four slowest), the level (fractions of the store's range) and
+/// the spill.
+void add_store_overflow_candidate(const Context& c, long j, long out_channel, std::vector<Candidate>& out) {
+  std::vector<double> poles = store_poles(c);
+  if (poles.empty()) return;
+  if (poles.size() > 4) poles.resize(4);
+  const Eigen::VectorXd uj = c.d.u.col(j);
+  std::vector<PhysicsBlock> grid;
+  for (double a : poles) {
+    const auto [low, high] = store_level_range(uj, a);
+    for (double q : {0.95, 0.85, 0.75, 0.6, 0.45})
+      for (double spill : {0.0, 0.5}) {
+        PhysicsBlock b = make_block("saturation", j, out_channel);
+        b.params["limit"] = low + q * (high - low);
+        b.params["storage_pole"] = a;
+        b.params["spill"] = spill;
+        grid.push_back(b);
+      }
+  }
+  Candidate best = best_as_is(c, grid);
+  const double a = best.block.param("storage_pole");
+  const auto [low, high] = store_level_range(uj, a);
+  // The pole may move by a factor of two in time constant: a nominal fitted to
+  // the saturating store holds a compromise of its dynamics.
+  best.free = {{"limit", low + 0.3 * (high - low), high}, {"storage_pole", a * a, std::sqrt(a)}, {"spill", 0.0, 1.0}};
+  best.detector_score = std::max(0.0, best.detector_score);
+  best.evidence = "a store filled by the input (pole " + std::to_string(a) + ") overflowing above " +
+                  std::to_string(best.block.param("limit")) + " explains " + percent(best.detector_score);
+  out.push_back(best);
+}
+
 void add_actuator_candidates(const Context& c, long j, std::vector<Candidate>& out) {
   const long out_channel = j < c.l ? j : 0;
   const Eigen::VectorXd uj = c.d.u.col(j);
@@ -278,6 +337,7 @@ void add_actuator_candidates(const Context& c, long j, std::vector<Candidate>& o
     best.evidence = "clipping the largest inputs explains " + percent(best.detector_score);
     out.push_back(best);
   }
+  add_store_overflow_candidate(c, j, out_channel, out);
   {
     // Bouc-Wen: loop width about alpha / (beta + gamma) in input units; grid over
     // the amplitude alpha and the loop's saturation scale.

@@ -93,6 +93,56 @@ TEST(DiagnoseApp, DeadZoneScenarioWritesAnAugmentedModelThatShowAndSimulateRun) 
   EXPECT_FALSE(std::filesystem::exists(tmp / "sim_x0.csv"));
 }
 
+TEST(DiagnoseApp, RefitNominalKeepsTheFindingAndReportsThePoles) {
+  // --refit-nominal on a scenario whose nominal is right but for a dead zone:
+  // the dead zone still leads, judged against the linear dynamics refitted
+  // alone, and the report and the augmented model carry the refitted core.
+  const std::string dir = kSuite + "stage_deadzone/";
+  TempDir tmp;
+  const std::string aug = tmp / "augmented.json";
+  CliResult r = run_cli({"diagnose", "--model", dir + "nominal.json", dir + "log.csv", "--inputs", "u", "--outputs", "y",
+                         "--refit-nominal", "--json", tmp / "report.json", "--out", aug});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  const json report = read_json(tmp / "report.json");
+  ASSERT_FALSE(report["findings"].empty()) << r.out;
+  EXPECT_EQ(report["findings"][0]["kind"], "deadzone") << r.out;
+  EXPECT_GT(report["fit_after"].get<double>(), report["fit_before"].get<double>() + 1.0);
+  ASSERT_TRUE(report.contains("nominal_refit")) << report.dump(2);
+  const json& refit = report["nominal_refit"];
+  EXPECT_TRUE(refit["applied"].get<bool>());
+  const json nominal = read_json(dir + "nominal.json");
+  EXPECT_EQ(refit["poles_before"].size(), nominal["A"].size());
+  EXPECT_EQ(refit["poles_after"].size(), nominal["A"].size());
+  const json model = read_json(aug);
+  EXPECT_NE(model["A"], nominal["A"]);  // the refitted core, in real modal form
+  // Without the flag the report has no nominal_refit and the core is the nominal's.
+  r = run_cli({"diagnose", "--model", dir + "nominal.json", dir + "log.csv", "--inputs", "u", "--outputs", "y", "--json",
+               tmp / "plain.json"});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_FALSE(read_json(tmp / "plain.json").contains("nominal_refit"));
+}
+
+TEST(DiagnoseApp, SplitOptionsAreCheckedAndNamed) {
+  const std::string dir = kSuite + "null_arm/";
+  TempDir tmp;
+  // Fit and selection fractions leaving nothing to hold out: exit 2 with the reason.
+  CliResult r = run_cli({"diagnose", "--model", dir + "nominal.json", dir + "log.csv", "--inputs", "u", "--outputs", "y",
+                         "--fit-fraction", "0.6", "--selection-fraction", "0.5", "--json", tmp / "r.json"});
+  EXPECT_EQ(r.exit_code, 2) << describe(r);
+  EXPECT_TRUE(contains(r.err, "fit_fraction")) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(tmp / "r.json"));
+  // Out of the option's range: a usage error.
+  r = run_cli({"diagnose", "--model", dir + "nominal.json", dir + "log.csv", "--fit-fraction", "0.95"});
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
+  r = run_cli({"diagnose", "--model", dir + "nominal.json", dir + "log.csv", "--min-segment", "10"});
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
+  // A valid split is used: the report says how much was held out.
+  r = run_cli({"diagnose", "--model", dir + "nominal.json", dir + "log.csv", "--inputs", "u", "--outputs", "y",
+               "--fit-fraction", "0.6", "--selection-fraction", "0.3", "--json", tmp / "r.json"});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_TRUE(contains(read_json(tmp / "r.json")["validation"].get<std::string>(), "last 10 %")) << r.out;
+}
+
 TEST(DiagnoseApp, BadInputFilesExitTwoNamingTheFile) {
   const std::string dir = kSuite + "stage_deadzone/";
   TempDir tmp;

@@ -206,6 +206,46 @@ TEST(AugmentedModel, ActuatorNonlinearitiesOnHandWorkedSignals) {
   EXPECT_GT(std::abs(hy(1, 0) - hy(5, 0)), 0.05);
 }
 
+/// The store's own recursion (physics_block.hpp): level v clipped at the limit,
+/// the next stage sees z = v + spill * overflow / (1 - a).
+VectorXd clipped_store_seen_level(const VectorXd& u, double a, double limit, double spill) {
+  VectorXd z(u.size());
+  double v = std::min(u[0], limit), seen = v;
+  for (Eigen::Index k = 0; k < u.size(); ++k) {
+    z[k] = seen;
+    const double filled = a * v + (1.0 - a) * u[k];
+    v = std::min(filled, limit);
+    seen = v + spill * (filled - v) / (1.0 - a);
+  }
+  return z;
+}
+
+TEST(AugmentedModel, StoreOverflowMakesTheNominalStoreReproduceTheClippedLevel) {
+  // The nominal is the store itself (pole a, unit DC gain, level out): fed the
+  // block's output it must give the clipped store's level exactly, with and
+  // without spill; below the limit the block is the identity.
+  const double a = 0.97, limit = 0.8;
+  const StateSpace store(MatrixXd{{a}}, MatrixXd{{1.0 - a}}, MatrixXd{{1.0}}, MatrixXd::Zero(1, 1), 4.0);
+  MatrixXd u(600, 1);
+  for (Eigen::Index k = 0; k < u.rows(); ++k) u(k, 0) = 1.5 * std::sin(kTwoPi * static_cast<double>(k) / 300.0);
+  for (double spill : {0.0, 0.4, 1.0}) {
+    const PhysicsBlock b = physics_block("saturation", {{"limit", limit}, {"storage_pole", a}, {"spill", spill}});
+    const MatrixXd w = sysid::actuator_output({b}, u, store.Ts, u.rows());
+    VectorXd x0(1);
+    x0 << std::min(u(0, 0), limit);
+    const MatrixXd level = sysid::simulate(store, w, x0);
+    const VectorXd expected = clipped_store_seen_level(u.col(0), a, limit, spill);
+    EXPECT_LT((level.col(0) - expected).cwiseAbs().maxCoeff(), 1e-12) << "spill " << spill;
+    EXPECT_GT(expected.maxCoeff(), limit - 1e-12);  // the store did overflow
+    if (spill == 0.0) EXPECT_LE(level.maxCoeff(), limit + 1e-12);
+  }
+  const PhysicsBlock high = physics_block("saturation", {{"limit", 2.0}, {"storage_pole", a}, {"spill", 0.5}});
+  EXPECT_LT((sysid::actuator_output({high}, u, store.Ts, u.rows()) - u).cwiseAbs().maxCoeff(), 1e-12);
+  // A block from before storage_pole and spill existed is an amplifier (defaults 0).
+  EXPECT_EQ(physics_block("saturation", {{"limit", 1.0}}).param("storage_pole"), 0.0);
+  EXPECT_EQ(physics_block("saturation", {{"limit", 1.0}}).param("spill"), 0.0);
+}
+
 TEST(AugmentedModel, RejectsBadBlocks) {
   const StateSpace d = sysid::c2d_zoh(oscillator(30, 0.02), kTs);
   const sysid::AugmentedSimulator sim(d);
@@ -213,6 +253,10 @@ TEST(AugmentedModel, RejectsBadBlocks) {
   EXPECT_THROW(sim.simulate({physics_block("magic", {})}, u), std::invalid_argument);
   EXPECT_THROW(sim.simulate({physics_block("deadzone", {})}, u), std::invalid_argument);
   EXPECT_THROW(sim.simulate({physics_block("deadzone", {{"width", -1.0}})}, u), std::invalid_argument);
+  EXPECT_THROW(sim.simulate({physics_block("saturation", {{"limit", 1.0}, {"storage_pole", 1.0}})}, u), std::invalid_argument);
+  EXPECT_THROW(sim.simulate({physics_block("saturation", {{"limit", 1.0}, {"storage_pole", 0.5}, {"spill", 1.5}})}, u),
+               std::invalid_argument);
+  EXPECT_THROW(sim.simulate({physics_block("saturation", {{"limit", -1.0}})}, u), std::invalid_argument);
   EXPECT_THROW(sim.simulate({physics_block("deadzone", {{"width", 1.0}}, 1)}, u), std::invalid_argument);
   EXPECT_THROW(sim.simulate({physics_block("missing_mode", {{"freq_hz", 5000.0}, {"damping", 0.01}, {"static_gain", 1.0}, {"velocity_gain", 0.0}})}, u),
                std::invalid_argument);  // above Nyquist

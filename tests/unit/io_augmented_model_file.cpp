@@ -85,7 +85,7 @@ AugmentedModel every_kind_model() {
       physics_block("coulomb_friction", {{"level", p(0.01, 0.02)}, {"velocity_scale", p(0.5, 1.0)}}, 0, 0),
       physics_block("backlash", {{"width", p(0.05, 0.1)}}, 1, 0),
       physics_block("deadzone", {{"width", p(0.05, 0.1)}}, 0, 0),
-      physics_block("saturation", {{"limit", p(1.5, 2.0)}}, 1, 1),
+      physics_block("saturation", {{"limit", p(1.5, 2.0)}, {"storage_pole", p(0.9, 0.95)}, {"spill", p(0.2, 0.5)}}, 1, 1),
       physics_block("cubic_stiffness", {{"coefficient", p(1e-3, 2e-3)}, {"linear_coefficient", p(-1e-3, 1e-3)}}, 1, 1),
       physics_block("hysteresis", {{"alpha", p(0.1, 0.2)}, {"beta", p(0.2, 0.4)}, {"gamma", p(0.1, 0.2)}}, 0, 0),
       physics_block("periodic_disturbance", {{"freq_hz", p(49, 51)}, {"amplitude", p(0.01, 0.02)}, {"phase_rad", p(-3, 3)}}, 0, 1),
@@ -218,6 +218,21 @@ TEST(AugmentedModelFile, NoBlocksIsAPlainStateSpaceFile) {
   const AugmentedModel r = through_text(a);
   EXPECT_TRUE(r.blocks.empty());
   EXPECT_EQ(r.nominal.A, a.nominal.A);
+}
+
+TEST(AugmentedModelFile, SaturationWithoutTheLaterParametersIsAnAmplifier) {
+  // Files written before a saturation had a store (storage_pole, spill) keep
+  // their meaning: clipping at +-limit.
+  json j = three_block_json();
+  j["blocks"][2] = {{"kind", "saturation"}, {"input", "u"}, {"output", "y"}, {"params", {{"limit", 0.7}}}};
+  const AugmentedModel a = sysid::augmented_model_from_file(sysid::model_from_json_string(j.dump(2), "aug.json"), "aug.json");
+  ASSERT_EQ(a.blocks.size(), 3u);
+  EXPECT_EQ(a.blocks[2].param("limit"), 0.7);
+  EXPECT_EQ(a.blocks[2].param("storage_pole"), 0.0);
+  EXPECT_EQ(a.blocks[2].param("spill"), 0.0);
+  const MatrixXd u = test_input(50, 1, 5, 1.0);
+  const MatrixXd w = sysid::actuator_output({a.blocks[2]}, u, a.nominal.Ts, u.rows());
+  EXPECT_TRUE(w.isApprox(u.cwiseMax(-0.7).cwiseMin(0.7)));
 }
 
 TEST(AugmentedModelFile, ErrorsNameTheBlockAndTheProblem) {

@@ -14,6 +14,7 @@
 /// Cost = sum over outputs of SSE_i / (rows * var(y_i)), i.e. the mean of
 /// (1 - fit_i/100)^2 up to the mean removal.
 #include <Eigen/Dense>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -66,6 +67,25 @@ CandidateFitResult fit_candidates(const AugmentedSimulator& simulator, const std
                                   std::vector<Candidate> candidates, const Eigen::Ref<const Eigen::MatrixXd>& u,
                                   const Eigen::Ref<const Eigen::MatrixXd>& y, Eigen::Index rows,
                                   const CandidateFitOptions& options = {});
+
+/// A parameter's coordinate in the unit box of its bounds (logarithmic when
+/// log_scale), clamped to [0, 1], and back.
+double unit_coordinate(const FreeParameter& p, double value);
+double parameter_value(const FreeParameter& p, double z);
+
+struct UnitBoxFit {
+  std::vector<double> z;   ///< the best point evaluated
+  double cost = 0.0;       ///< its cost
+  double start_cost = 0.0;
+  int evaluations = 0;
+};
+
+/// Minimises cost(z) over [0, 1]^d: DIRECT-L with `global_evaluations` (0: no
+/// global stage) from nowhere in particular, then BOBYQA from the best point so
+/// far. Returns the best point evaluated, never worse than `start`. A
+/// non-finite cost counts as 1e30 (worse than anything).
+UnitBoxFit minimise_in_unit_box(const std::function<double(const std::vector<double>&)>& cost, const std::vector<double>& start,
+                                int global_evaluations, int local_evaluations, double relative_tolerance);
 
 /// The blocks of `fixed` followed by those of `candidates`.
 std::vector<PhysicsBlock> combine_blocks(const std::vector<PhysicsBlock>& fixed, const std::vector<Candidate>& candidates);

@@ -38,6 +38,7 @@
 #include "sysid/diagnose/augmented_model.hpp"
 #include "sysid/diagnose/candidate_fit.hpp"
 #include "sysid/diagnose/hypotheses.hpp"
+#include "sysid/diagnose/linear_core_refit.hpp"
 #include "sysid/diagnose/mismatch_location.hpp"
 
 namespace sysid {
@@ -51,9 +52,30 @@ struct DiagnoseOptions {
   Eigen::Index max_correlation_lag = 500;  ///< lags of the noise autocovariance in the acceptance test
   double min_gain_points = 0.05;     ///< minimum penalised gain on the selection segment, fit points
   double penalty_points_per_parameter = 0.02;  ///< penalty per free parameter, fit points
+  /// Fewest samples in each of the three segments. 200 keeps the acceptance test
+  /// and the held-out fit meaningful for most records; a short record whose
+  /// effect shows in few episodes (the cascaded tanks overflow twice in 1 024
+  /// samples) may need smaller segments to have an episode in fit and selection.
+  Eigen::Index min_segment_samples = 200;
+  /// Refit the nominal's linear dynamics together with the blocks
+  /// (linear_core_refit.hpp) — for a nominal identified from the same machine,
+  /// whose poles and gains hold a compromise of the nonlinearity the blocks
+  /// model. Every candidate is then fitted with the core and judged against the
+  /// core refitted alone on the same fit segment; an accepted one brings its
+  /// core along. Off by default: a simulation model from first principles is
+  /// what the diagnosis tests, not something to tune.
+  bool refit_nominal = false;
+  LinearCoreRefitOptions refit;
   DetectionOptions detection;
   CandidateFitOptions fit;
   MismatchLocationOptions location;
+};
+
+/// What refit_nominal did.
+struct NominalRefit {
+  bool attempted = false;  ///< refit_nominal was on
+  bool applied = false;    ///< an accepted finding brought a refitted core (then in `augmented`)
+  Eigen::VectorXcd poles_before, poles_after;  ///< discrete poles of the nominal and of the final core
 };
 
 /// A candidate after fitting, with its judgement on the selection segment.
@@ -83,7 +105,8 @@ struct DiagnoseReport {
   std::vector<Finding> findings;                   ///< ranked, most important first; empty = no significant mismatch
   std::vector<JudgedCandidate> considered;         ///< every candidate fitted, all rounds
   MismatchLocation location;                       ///< the nominal's mismatch on the estimation part
-  AugmentedModel augmented;                        ///< the nominal with the findings' blocks
+  NominalRefit nominal_refit;                      ///< refit_nominal's outcome (not attempted by default)
+  AugmentedModel augmented;                        ///< the nominal (refitted, if nominal_refit.applied) with the findings' blocks
   Eigen::MatrixXd simulated_before, simulated_after;  ///< whole record, raw coordinates (for plots)
   std::vector<std::string> warnings;
 };
@@ -92,8 +115,8 @@ struct DiagnoseReport {
 /// blocks, if any, are kept as accepted), u and y are the raw log (N x m, N x l),
 /// in the nominal's channel order.
 /// Preconditions (std::invalid_argument): sizes agree with the nominal, values
-/// finite, fractions in (0, 1) with fit + selection < 1, at least 200 samples in
-/// every segment.
+/// finite, fractions in (0, 1) with fit + selection < 1, at least
+/// min_segment_samples (>= 50) samples in every segment.
 DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Eigen::MatrixXd>& u,
                         const Eigen::Ref<const Eigen::MatrixXd>& y, const DiagnoseOptions& options = {});
 
@@ -111,14 +134,15 @@ struct RecordingValidation {
   Eigen::VectorXd x0_before, x0_after;    ///< the initial states used
 };
 
-/// Preconditions (std::invalid_argument): `augmented` is `nominal` with blocks (same
-/// linear model); u N x m and y N x l match it, N >= 1.
+/// Preconditions (std::invalid_argument): `augmented` has the nominal's channels and
+/// sample time (its linear core may be refitted); u N x m and y N x l match it, N >= 1.
 RecordingValidation validate_on_recording(const AugmentedModel& nominal, const AugmentedModel& augmented,
                                           const Eigen::Ref<const Eigen::MatrixXd>& u, const Eigen::Ref<const Eigen::MatrixXd>& y);
 
 /// A sentence describing a fitted block, e.g. "The recordings contain a lightly
-/// damped mode at 31.6 Hz (damping 0.012) that the simulation lacks."
+/// damped mode at 31.6 Hz (damping 0.012) that the simulation lacks." `ts` is
+/// the nominal's sample time (a store's pole is told as a time constant).
 std::string finding_summary(const PhysicsBlock& block, const std::vector<std::string>& input_names,
-                            const std::vector<std::string>& output_names);
+                            const std::vector<std::string>& output_names, double ts);
 
 }  // namespace sysid

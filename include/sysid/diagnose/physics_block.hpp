@@ -7,7 +7,11 @@
 /// Where each kind acts (the equations live in augmented_model.cpp):
 /// - actuator (between the command u_j and the plant force):
 ///   deadzone, saturation, backlash, hysteresis (discrete Bouc-Wen), time_delay,
-///   input_lag (first-order low-pass, part of the linear core);
+///   input_lag (first-order low-pass, part of the linear core). saturation is
+///   either an amplifier clipping at +-limit (storage_pole = 0) or the overflow
+///   above limit of a first-order store the input fills — a tank whose level the
+///   nominal's pole storage_pole describes — part of whose spill (spill) reaches
+///   the next stage (a store running dry is not modelled);
 /// - inside the plant (a force fed back around the nominal model at input j,
 ///   computed from output i — collocated position — and its velocity):
 ///   coulomb_friction, cubic_stiffness; missing_mode is a modal term in parallel
@@ -56,7 +60,10 @@ inline const std::vector<BlockKindInfo>& block_kinds() {
        "Coulomb friction opposing the motion"},
       {"backlash", BlockStage::actuator, {"width"}, {"width"}, "play (backlash) in the actuation"},
       {"deadzone", BlockStage::actuator, {"width"}, {"width"}, "a dead zone in the actuation"},
-      {"saturation", BlockStage::actuator, {"limit"}, {"limit"}, "saturation of the actuation"},
+      // storage_pole and spill were added after the first files were written:
+      // optional in files (optional_parameter_default).
+      {"saturation", BlockStage::actuator, {"limit", "storage_pole", "spill"}, {"limit"},
+       "saturation of the actuation"},
       {"cubic_stiffness", BlockStage::plant_feedback, {"coefficient", "linear_coefficient"}, {"coefficient"},
        "a hardening (cubic) stiffness"},
       {"hysteresis", BlockStage::actuator, {"alpha", "beta", "gamma"}, {}, "hysteresis (Bouc-Wen) in the actuator"},
@@ -86,18 +93,39 @@ inline const BlockKindInfo& block_kind_info(const std::string& kind) {
 }
 
 /// One effect added to the nominal model.
+struct PhysicsBlock;
+
+/// Parameters a model file may omit because they were added to a kind after
+/// files with it were written, and their value then (keeping those files'
+/// meaning): saturation's storage_pole = 0 (no store: an amplifier) and
+/// spill = 0. False for any other parameter.
+inline bool optional_parameter_default(const PhysicsBlock& block, const std::string& name, double& value);
+
 struct PhysicsBlock {
   std::string kind;                      ///< a name from block_kinds()
   long input = 0;                        ///< the input channel it acts on (actuator, plant, coupling source)
   long output = 0;                       ///< the output channel it acts on (plant position, sensor, coupling target)
   std::map<std::string, double> params;  ///< every name of block_kind_info(kind).parameters
 
+  /// The parameter's value; a parameter added to the kind later
+  /// (optional_parameter_default) has its default when absent.
   double param(const std::string& name) const {
     const auto it = params.find(name);
-    if (it == params.end()) throw std::invalid_argument(kind + ": missing parameter '" + name + "'");
-    return it->second;
+    if (it != params.end()) return it->second;
+    double fallback = 0.0;
+    if (optional_parameter_default(*this, name, fallback)) return fallback;
+    throw std::invalid_argument(kind + ": missing parameter '" + name + "'");
   }
   const BlockKindInfo& info() const { return block_kind_info(kind); }
 };
+
+inline bool optional_parameter_default(const PhysicsBlock& block, const std::string& name, double& value) {
+  if (block.kind != "saturation") return false;
+  if (name == "storage_pole" || name == "spill") {
+    value = 0.0;
+    return true;
+  }
+  return false;
+}
 
 }  // namespace sysid
