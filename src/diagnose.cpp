@@ -360,6 +360,8 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
     if (o.refit_nominal) {
       const LinearCoreRefitResult alone = refit_core(accepted, fit_rows, current_sim.substeps());
       if (alone.refitted) reference = simulate_refit(alone, current_sim.substeps(), seg.estimation);
+      else if (round == 1)  // e.g. too large a nominal: the candidates are judged on the nominal as given
+        for (const auto& w : alone.warnings) report.warnings.push_back("diagnose: " + w);
     }
     const double before_fit = mean_fit(y.middleRows(seg.fit, seg.estimation - seg.fit),
                                        reference.middleRows(seg.fit, seg.estimation - seg.fit));

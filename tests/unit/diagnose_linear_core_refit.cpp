@@ -75,6 +75,33 @@ TEST(LinearCoreRefit, RecoversTheTanksBehindAnOverflowingUpperTank) {
   EXPECT_GT(rms(y_check - before.simulate({start.block}, u_check)), 0.1);
 }
 
+TEST(LinearCoreRefit, MovesTheModesOfAMimoNominalToTheData) {
+  // Two inputs, two outputs, a real pole pair and a complex pair (the real
+  // modal form's 2x2 block), no physics blocks: the refit is an output-error
+  // fit of poles, B, D and x0 with C held.
+  const MatrixXd C{{1.0, 0.5, 0.2, 0.0}, {0.0, 1.0, 0.3, 0.6}};
+  const MatrixXd B{{0.3, 0.1}, {0.0, 0.2}, {0.25, -0.1}, {0.1, 0.3}};
+  auto system = [&](double a1, double a2, double r, double angle) {
+    MatrixXd A = MatrixXd::Zero(4, 4);
+    A(0, 0) = a1;
+    A(1, 1) = a2;
+    A.block<2, 2>(2, 2) << r * std::cos(angle), r * std::sin(angle), -r * std::sin(angle), r * std::cos(angle);
+    return sysid::StateSpace(A, B, C, MatrixXd::Zero(2, 2), 1.0);
+  };
+  const sysid::StateSpace truth = system(0.95, 0.85, 0.9, 0.4), off = system(0.93, 0.87, 0.88, 0.44);
+  const MatrixXd u = sysid::test::white_noise(3000, 2, 31);
+  const MatrixXd y = sysid::simulate(truth, u);
+  const sysid::LinearCoreRefitResult r = sysid::refit_linear_core(off, VectorXd(), {}, {}, u, y, u.rows(), 1);
+  ASSERT_TRUE(r.refitted);
+  EXPECT_LT(r.cost, 1e-3 * r.start_cost);
+  const Eigen::VectorXcd expected = sysid::poles(truth);
+  for (Eigen::Index k = 0; k < expected.size(); ++k) {
+    double nearest = 1.0;
+    for (Eigen::Index q = 0; q < r.poles_after.size(); ++q) nearest = std::min(nearest, std::abs(r.poles_after[q] - expected[k]));
+    EXPECT_LT(nearest, 2e-3) << expected[k];
+  }
+}
+
 TEST(LinearCoreRefit, ATrueNominalStaysAndLargeOrDefectiveNominalsAreNotRefitted) {
   const sysid::StateSpace truth = cascaded_tanks(0.97, 0.93, 1.0);
   const MatrixXd u = pump_command(2000, 21);
