@@ -235,7 +235,7 @@ std::string finding_summary(const PhysicsBlock& b, const std::vector<std::string
     return "The actuation of " + in + " has a dead zone of total width " + fixed(b.param("width"), 3) + " (input units).";
   if (k == "saturation" && b.param("storage_pole") > 0.0) {
     // Time constant of the store from its discrete pole: a = exp(-Ts / tau).
-    return "The store that " + in + " fills (a tank or reservoir with a time constant of " +
+    return "The store that " + in + " fills (a tank, chamber or reservoir with a time constant of " +
            fixed(-ts / std::log(b.param("storage_pole")), 3) + " s) overflows above the level a steady " + in + " of " +
            fixed(b.param("limit"), 4) + " (input units, from the operating point) would reach; " +
            fixed(100.0 * b.param("spill"), 3) + " % of the spill flows on to the next stage.";

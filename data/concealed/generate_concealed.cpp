@@ -33,6 +33,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <stdexcept>
@@ -205,6 +206,11 @@ Eigen::VectorXd make_input(const InputSpec& s) {
 struct Effects {
   int delay_samples = 0;                       ///< time_delay
   double lag_corner_hz = 0;                    ///< input_lag (0: none)
+  /// A first-order store in the actuator that the nominal HAS (a pneumatic
+  /// chamber filled through a valve: its pressure force follows the command at
+  /// this corner), capped by a relief valve at store_limit N, which the nominal
+  /// lacks: saturation of a store (0: none).
+  double store_corner_hz = 0, store_limit = 0;
   double backlash_width = 0;                   ///< full width of the play, N
   double deadzone_width = 0;                   ///< full width, N
   double saturation_limit = 0;                 ///< N (0: none)
@@ -267,13 +273,14 @@ struct TruePlant {
   Vec c_y, c_v;  ///< y = c_y . x and dy/dt = c_v . x (output units)
   int lag_index = -1;
   double lag_w = 0;
+  double lag_limit = std::numeric_limits<double>::infinity();  ///< relief valve on the lag state (store)
   double friction = 0, v_eps = 1, cubic = 0;
   double mode_residue = 0;  ///< residue of the hidden mode, output units / (N s^2)
 };
 
 TruePlant true_plant(const Plant& p, const Effects& fx) {
   const int n = static_cast<int>(p.continuous.order());
-  const bool mode = fx.mode_freq_hz > 0, lag = fx.lag_corner_hz > 0;
+  const bool mode = fx.mode_freq_hz > 0, lag = fx.lag_corner_hz > 0 || fx.store_corner_hz > 0;
   const int total = n + (mode ? 2 : 0) + (lag ? 1 : 0);
   if (total > kMaxStates) throw std::logic_error("true plant too large for the RK4 buffers");
   TruePlant t;
@@ -300,7 +307,8 @@ TruePlant true_plant(const Plant& p, const Effects& fx) {
   }
   if (lag) {
     t.lag_index = total - 1;
-    t.lag_w = kTwoPi * fx.lag_corner_hz;
+    t.lag_w = kTwoPi * (fx.lag_corner_hz > 0 ? fx.lag_corner_hz : fx.store_corner_hz);
+    if (fx.store_limit > 0) t.lag_limit = fx.store_limit;
   }
   t.friction = fx.friction_level;
   t.cubic = fx.cubic_coefficient;
@@ -327,7 +335,11 @@ Eigen::VectorXd simulate_true(const TruePlant& p, const Eigen::VectorXd& f) {
     }
     d.noalias() = p.A * state;
     d += p.b * drive;
-    if (p.lag_index >= 0) d(p.lag_index) = p.lag_w * (force - state(p.lag_index));
+    if (p.lag_index >= 0) {
+      d(p.lag_index) = p.lag_w * (force - state(p.lag_index));
+      // The relief valve: the chamber does not fill past its limit.
+      if (state(p.lag_index) >= p.lag_limit && d(p.lag_index) > 0) d(p.lag_index) = 0;
+    }
   };
   Eigen::VectorXd y(f.size());
   for (Eigen::Index k = 0; k < f.size(); ++k) {
@@ -341,6 +353,7 @@ Eigen::VectorXd simulate_true(const TruePlant& p, const Eigen::VectorXd& f) {
       s = x + h * k3;
       derivative(s, f(k), k4);
       x += (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+      if (p.lag_index >= 0) x(p.lag_index) = std::min(x(p.lag_index), p.lag_limit);
     }
   }
   if (!y.allFinite()) throw std::runtime_error("true-system simulation diverged");
@@ -393,8 +406,26 @@ json effects_json(const TruePlant& tp, const Effects& fx) {
   if (fx.backlash_width > 0) add("backlash", {{"width", fx.backlash_width}});
   if (fx.deadzone_width > 0) add("deadzone", {{"width", fx.deadzone_width}});
   if (fx.saturation_limit > 0) add("saturation", {{"limit", fx.saturation_limit}});
+  if (fx.store_limit > 0)
+    add("saturation", {{"limit", fx.store_limit}, {"storage_pole", std::exp(-kTwoPi * fx.store_corner_hz * kTs)}, {"spill", 0.0}});
   if (fx.bw_alpha > 0) add("hysteresis", {{"alpha", fx.bw_alpha}, {"beta", fx.bw_beta}, {"gamma", fx.bw_gamma}});
   return e;
+}
+
+/// The plant behind a first-order store of unit DC gain (corner f): u -> store -> plant.
+StateSpace with_store(const StateSpace& plant, double corner_hz) {
+  const Eigen::Index n = plant.order();
+  const double w = kTwoPi * corner_hz;
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n + 1, n + 1), B = Eigen::MatrixXd::Zero(n + 1, 1), C = Eigen::MatrixXd::Zero(1, n + 1);
+  A.topLeftCorner(n, n) = plant.A;
+  A.topRightCorner(n, 1) = plant.B;
+  A(n, n) = -w;
+  B(n, 0) = w;
+  C.leftCols(n) = plant.C;
+  StateSpace s(A, B, C, Eigen::MatrixXd::Zero(1, 1), 0.0);
+  s.input_names = plant.input_names;
+  s.output_names = plant.output_names;
+  return s;
 }
 
 /// Simulates one scenario, writes its three files, returns the fits.
@@ -406,7 +437,8 @@ Outcome run_scenario(const Scenario& sc, const std::filesystem::path& out) {
 
   // Linear nominal responses (exact ZOH): the nominal prediction from u, and the
   // driven mass's velocity under the actual force (for the friction's v_eps).
-  StateSpace nominal = sysid::c2d_zoh(plant.continuous, kTs);
+  // A store the nominal has sits in series before the plant.
+  StateSpace nominal = sysid::c2d_zoh(fx.store_corner_hz > 0 ? with_store(plant.continuous, fx.store_corner_hz) : plant.continuous, kTs);
   const Eigen::VectorXd y_nominal = sysid::simulate(nominal, u).col(0);
   StateSpace velocity_model = plant.continuous;
   velocity_model.C = plant.velocity;
@@ -462,6 +494,16 @@ Outcome run_scenario(const Scenario& sc, const std::filesystem::path& out) {
                   100.0 * fx.cubic_coefficient * y_max * y_max / k_static);
   } else if (fx.friction_level > 0) {
     std::snprintf(note, sizeof note, "level / max|u|: %.1f %%", 100.0 * fx.friction_level / u.cwiseAbs().maxCoeff());
+  } else if (fx.store_limit > 0) {
+    const double a = std::exp(-kTwoPi * fx.store_corner_hz * kTs);
+    double level = 0.0;
+    Eigen::Index capped = 0;
+    for (Eigen::Index k = 0; k < kSamples; ++k) {
+      level = a * level + (1.0 - a) * u(k);
+      if (level > fx.store_limit) ++capped, level = fx.store_limit;
+    }
+    std::snprintf(note, sizeof note, "capped samples: %.1f %%, limit / peak command %.2f",
+                  100.0 * static_cast<double>(capped) / kSamples, fx.store_limit / u.maxCoeff());
   } else if (fx.saturation_limit > 0) {
     const auto clipped = (u.array().abs() > fx.saturation_limit).count();
     std::snprintf(note, sizeof note, "clipped samples: %.2f %%, limit / u_rms %.2f",
@@ -678,6 +720,14 @@ std::vector<Scenario> scenarios(const Plant& arm, const Plant& iso, const Plant&
     add("stage_friction_and_hum", stage, stage_in, fx, 0.015, 1014,
         "Two small effects at once: Coulomb friction of 0.07 N (2 % of the peak force) and 50 Hz hum as strong "
         "as the measurement noise.");
+  }
+  {
+    Effects fx;
+    fx.store_corner_hz = 20.0;
+    fx.store_limit = 2.85;
+    add("stage_relief_valve", stage, stage_in, fx, 0.01, 1017,
+        "A pneumatic actuator whose chamber (20 Hz fill, in the nominal) has a relief valve at 2.85 N: only the top "
+        "of the largest pushes of the 3 N stroke is capped, one-sided, and the fill lag smooths the cap.");
   }
   add("null_arm", arm, arm_in, Effects{}, 0.02, 1015, "Nothing is hidden: the nominal model is the true plant.");
   add("null_isolator", iso, iso_in, Effects{}, 0.02, 1016, "Nothing is hidden: the nominal model is the true plant.");

@@ -92,7 +92,7 @@ INSTANTIATE_TEST_SUITE_P(Suite, Concealed,
                          ::testing::Values("arm_missing_mode", "arm_time_delay", "isolator_time_delay2", "isolator_input_lag",
                                            "arm_gain_error", "stage_coulomb_friction", "arm_cubic_stiffness",
                                            "stage_backlash", "stage_deadzone", "isolator_saturation", "isolator_hysteresis",
-                                           "isolator_hum", "stage_offset_drift", "stage_friction_and_hum", "null_arm",
+                                           "isolator_hum", "stage_offset_drift", "stage_friction_and_hum", "stage_relief_valve", "null_arm",
                                            "null_isolator"));
 
 }  // namespace
