@@ -295,19 +295,26 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
     for (const auto& c : set) feedback = feedback || c.substeps > 1;
     return feedback ? *fine : *fast;
   };
+  std::vector<PhysicsBlock> base = nominal.blocks;  // blocks already in the model stay
+  std::vector<Candidate> accepted;
   // The core and every block refitted together (refit_nominal), on rows [0, rows).
   auto refit_core = [&](const std::vector<Candidate>& blocks, Eigen::Index rows, int steps) {
-    return refit_linear_core(core, core_x0, nominal.blocks, blocks, u.topRows(rows), y.topRows(rows), rows, steps, o.refit);
+    return refit_linear_core(core, core_x0, base, blocks, u.topRows(rows), y.topRows(rows), rows, steps, o.refit);
   };
   auto simulate_refit = [&](const LinearCoreRefitResult& r, int steps, Eigen::Index rows) {
-    return AugmentedSimulator(r.model, steps, r.x0).simulate(combine_blocks(nominal.blocks, r.blocks), u, rows);
+    return AugmentedSimulator(r.model, steps, r.x0).simulate(combine_blocks(base, r.blocks), u, rows);
+  };
+  // A refit's core and blocks become the model's.
+  auto adopt = [&](const LinearCoreRefitResult& r) {
+    core = r.model;
+    core_x0 = r.x0;
+    accepted = r.blocks;
+    build_simulators();
   };
   report.nominal_refit.attempted = o.refit_nominal;
   report.nominal_refit.poles_before = poles(model);
   report.nominal_refit.poles_after = report.nominal_refit.poles_before;
 
-  std::vector<PhysicsBlock> base = nominal.blocks;  // blocks already in the model stay
-  std::vector<Candidate> accepted;
   std::vector<JudgedCandidate> acceptance;  ///< how each accepted candidate passed, same order
   // Refits after an acceptance start from good values: the local stage only.
   CandidateFitOptions local_fit = o.fit;
@@ -409,10 +416,7 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
     acceptance.push_back(judged[best]);
     if (refits[best]) {
       // The core moves with the blocks (fitted together on the fit segment).
-      core = refits[best]->model;
-      core_x0 = refits[best]->x0;
-      accepted = refits[best]->blocks;
-      build_simulators();
+      adopt(*refits[best]);
       report.nominal_refit.applied = true;
     } else {
       accepted.push_back(judged[best].candidate);
@@ -422,11 +426,7 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
 
   // 4. Prove: refit on the whole estimation part, then score on validation.
   if (!accepted.empty() && report.nominal_refit.applied) {
-    const LinearCoreRefitResult r = refit_core(accepted, seg.estimation, simulator_for(accepted, base).substeps());
-    core = r.model;
-    core_x0 = r.x0;
-    accepted = r.blocks;
-    build_simulators();
+    adopt(refit_core(accepted, seg.estimation, simulator_for(accepted, base).substeps()));
     report.nominal_refit.poles_after = poles(core);
   } else if (!accepted.empty()) {
     accepted = fit_candidates(simulator_for(accepted, base), base, accepted, u.topRows(seg.estimation),

@@ -10,6 +10,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "sysid/core/detail/real_modal_form.hpp"
 #include "sysid/core/errors.hpp"
 #include "sysid/core/poles_zeros.hpp"
 #include "sysid/core/simulate.hpp"
@@ -18,46 +19,19 @@ namespace sysid {
 
 namespace {
 
-/// Real modal form: A_m = T^-1 A T block diagonal, one 1x1 block per real pole
-/// and one [[sigma, omega], [-omega, sigma]] per complex pair (omega > 0).
-struct RealModalForm {
-  Eigen::MatrixXd T;
-  std::vector<Eigen::Index> block_start;  ///< first state of each block
-  std::vector<bool> pair;                 ///< the block is a complex pair
-};
-
-bool real_modal_form(const Eigen::MatrixXd& A, RealModalForm& form) {
-  const Eigen::Index n = A.rows();
-  Eigen::EigenSolver<Eigen::MatrixXd> eig(A);
-  if (eig.info() != Eigen::Success) return false;
-  const Eigen::VectorXcd lambda = eig.eigenvalues();
-  const Eigen::MatrixXcd V = eig.eigenvectors();
-  form.T.resize(n, n);
-  Eigen::Index col = 0;
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const std::complex<double> p = lambda(k);
-    const bool is_real = std::abs(p.imag()) <= 1e-12 * std::max(1.0, std::abs(p));
-    if (!is_real && p.imag() < 0.0) continue;  // the conjugate of a pair already placed
-    form.block_start.push_back(col);
-    form.pair.push_back(!is_real);
-    if (is_real) {
-      form.T.col(col++) = V.col(k).real();
-    } else {
-      if (col + 2 > n) return false;
-      form.T.col(col++) = V.col(k).real();
-      form.T.col(col++) = V.col(k).imag();
-    }
-  }
-  if (col != n) return false;
+/// The real modal form (core/detail/real_modal_form.hpp) with T well enough
+/// conditioned to refit in: cond(T) below 1e8.
+bool well_conditioned_real_modal_form(const Eigen::MatrixXd& A, detail::RealModalForm& form) {
+  if (detail::real_modal_form(A, form) != detail::RealModalStatus::ok) return false;
   const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(form.T).singularValues();
-  return sv(n - 1) > 1e-8 * sv(0);
+  return sv(sv.size() - 1) > 1e-8 * sv(0);
 }
 
 /// Everything the refit varies, with its box; `apply` writes a unit-box point
 /// into the model, x0 and the candidates.
 struct Parameterisation {
   std::vector<FreeParameter> linear;  ///< poles, B_m, D, x0_m (names for messages only)
-  RealModalForm form;
+  detail::RealModalForm form;
   Eigen::MatrixXd C;                  ///< fixed C_m
   Eigen::Index n = 0, m = 0, l = 0;
   double Ts = 0.0;
@@ -67,9 +41,9 @@ struct Parameterisation {
     Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n), B(n, m), D(l, m);
     std::size_t k = 0;
     auto next = [&]() { const double v = parameter_value(linear[k], z[k]); ++k; return v; };
-    for (std::size_t b = 0; b < form.block_start.size(); ++b) {
-      const Eigen::Index s = form.block_start[b];
-      if (!form.pair[b]) {
+    for (const auto& block : form.blocks) {
+      const Eigen::Index s = block.start;
+      if (block.size == 1) {
         A(s, s) = next();
       } else {
         const double modulus = next(), angle = next();
@@ -129,7 +103,7 @@ LinearCoreRefitResult refit_linear_core(const StateSpace& nominal, const Eigen::
   par.m = m;
   par.l = l;
   par.Ts = nominal.Ts;
-  if (!real_modal_form(nominal.A, par.form)) {
+  if (!well_conditioned_real_modal_form(nominal.A, par.form)) {
     result.warnings.push_back("the nominal's linear dynamics were not refitted: its A has no well-conditioned eigenvector basis");
     return result;
   }
@@ -154,9 +128,9 @@ LinearCoreRefitResult refit_linear_core(const StateSpace& nominal, const Eigen::
     start.push_back(unit_coordinate(bounds, value));
     par.linear.push_back(std::move(bounds));
   };
-  for (std::size_t b = 0; b < par.form.block_start.size(); ++b) {
-    const Eigen::Index s = par.form.block_start[b];
-    if (!par.form.pair[b]) {
+  for (const auto& block : par.form.blocks) {
+    const Eigen::Index s = block.start;
+    if (block.size == 1) {
       add(modulus_bounds("pole", Am(s, s)), Am(s, s));
     } else {
       const double sigma = Am(s, s), omega = Am(s, s + 1);
@@ -181,8 +155,8 @@ LinearCoreRefitResult refit_linear_core(const StateSpace& nominal, const Eigen::
   // would trade off against the limit. Which pole is the store is not known (the
   // upper tank may be the faster one): every real pole is tried, the best kept.
   std::vector<Eigen::Index> real_pole_states;
-  for (std::size_t b = 0; b < par.form.block_start.size(); ++b)
-    if (!par.form.pair[b]) real_pole_states.push_back(par.form.block_start[b]);
+  for (const auto& block : par.form.blocks)
+    if (block.size == 1) real_pole_states.push_back(block.start);
   std::vector<std::size_t> stores;
   for (std::size_t k = 0; k < candidates.size(); ++k)
     if (candidates[k].block.kind == "saturation" && candidates[k].block.param("storage_pole") > 0.0 && !real_pole_states.empty())
@@ -194,8 +168,11 @@ LinearCoreRefitResult refit_linear_core(const StateSpace& nominal, const Eigen::
     return result;
   }
 
+  // Never worse than the start as given (a store's own pole, untied, is not in
+  // the tied parameterisation): a refit is kept only when it beats that.
+  result.start_cost = simulation_cost(AugmentedSimulator(nominal, substeps, x0), combine_blocks(fixed, candidates), u, y, rows);
   const std::vector<double> linear_start = start;
-  double best_cost = std::numeric_limits<double>::infinity();
+  double best_cost = result.start_cost;
   for (std::size_t assignment = 0; assignment < assignments; ++assignment) {
     std::vector<Candidate> working = candidates;
     std::vector<std::pair<std::size_t, Eigen::Index>> tied;  ///< (candidate, state of its real pole)
@@ -244,16 +221,7 @@ LinearCoreRefitResult refit_linear_core(const StateSpace& nominal, const Eigen::
     // The caller's free lists (with storage_pole) stay as they were.
     for (std::size_t k = 0; k < result.blocks.size(); ++k) result.blocks[k].free = candidates[k].free;
   }
-  // Never worse than the start as given (a store's own pole, untied, is not in
-  // the tied parameterisation).
-  result.start_cost = simulation_cost(AugmentedSimulator(nominal, substeps, x0), combine_blocks(fixed, candidates), u, y, rows);
   result.cost = best_cost;
-  if (!(best_cost <= result.start_cost)) {
-    result.model = nominal;
-    result.x0 = x0.size() ? x0 : Eigen::VectorXd::Zero(n);
-    result.blocks = candidates;
-    result.cost = result.start_cost;
-  }
   result.refitted = true;
   result.poles_after = poles(result.model);
   return result;

@@ -2,6 +2,7 @@
 // once into libsysid: the eigenvector solver and LU factorisations are heavy to
 // instantiate.
 #include <sysid/core/detail/modal_table.hpp>
+#include <sysid/core/detail/real_modal_form.hpp>
 #include <sysid/reduce/detail/hankel_singular_values.hpp>
 #include <sysid/reduce/detail/reduction_error.hpp>
 #include <sysid/reduce/modal_truncation.hpp>
@@ -32,32 +33,25 @@ ReductionResult modal_truncation(const StateSpace& sys, const ModalTruncationOpt
 
   // Real modal form.
   Eigen::MatrixXd Vr(n, n);
-  struct Block {
-    Eigen::Index start, size;
-    Complex lambda;
+  struct Block : detail::RealModalBlock {
     Mode mode;
     double dominance = 0.0;
   };
   std::vector<Block> blocks;
   if (n > 0) {
-    const Eigen::EigenSolver<Eigen::MatrixXd> es(g.A, true);
-    if (es.info() != Eigen::Success) throw NumericalError("modal_truncation: eigenvalue iteration did not converge");
-    const Eigen::VectorXcd lam = es.eigenvalues();
-    const Eigen::MatrixXcd V = es.eigenvectors();
-    Eigen::Index col = 0;
-    for (Eigen::Index i = 0; i < n; ++i) {
-      if (lam(i).imag() == 0.0) {
-        Vr.col(col) = V.col(i).real();
-        blocks.push_back({col, 1, lam(i), detail::make_mode(lam(i), g.Ts, false)});
-        col += 1;
-      } else if (lam(i).imag() > 0.0) {
-        Vr.col(col) = V.col(i).real();
-        Vr.col(col + 1) = V.col(i).imag();
-        blocks.push_back({col, 2, lam(i), detail::make_mode(lam(i), g.Ts, true)});
-        col += 2;
-      }
+    detail::RealModalForm form;
+    const detail::RealModalStatus status = detail::real_modal_form(g.A, form);
+    if (status == detail::RealModalStatus::no_convergence)
+      throw NumericalError("modal_truncation: eigenvalue iteration did not converge");
+    if (status == detail::RealModalStatus::unpaired)
+      throw NumericalError("modal_truncation: eigenvalues are not in conjugate pairs");
+    Vr = form.T;
+    for (const auto& b : form.blocks) {
+      Block block;
+      static_cast<detail::RealModalBlock&>(block) = b;
+      block.mode = detail::make_mode(b.lambda, g.Ts, b.size == 2);
+      blocks.push_back(block);
     }
-    if (col != n) throw NumericalError("modal_truncation: eigenvalues are not in conjugate pairs");
   }
   const Eigen::PartialPivLU<Eigen::MatrixXd> lu(Vr);
   const double rcond = n > 0 ? lu.rcond() : 1.0;
@@ -71,12 +65,6 @@ ReductionResult modal_truncation(const StateSpace& sys, const ModalTruncationOpt
   }
   const Eigen::MatrixXd Bm = n > 0 ? Eigen::MatrixXd(lu.solve(g.B)) : Eigen::MatrixXd(0, m);
   const Eigen::MatrixXd Cm = g.C * Vr;
-  auto block_A = [](const Block& b) {
-    Eigen::MatrixXd a(b.size, b.size);
-    if (b.size == 1) a(0, 0) = b.lambda.real();
-    else a << b.lambda.real(), b.lambda.imag(), -b.lambda.imag(), b.lambda.real();
-    return a;
-  };
 
   // Selection.
   std::vector<bool> keep(blocks.size(), false);
@@ -84,7 +72,7 @@ ReductionResult modal_truncation(const StateSpace& sys, const ModalTruncationOpt
     for (Block& b : blocks) {
       const double arg = discrete ? std::abs(std::arg(b.lambda)) : std::abs(b.lambda.imag());
       const Complex at = discrete ? std::polar(1.0, arg) : Complex(0.0, arg);
-      const StateSpace mode_sys(block_A(b), Bm.middleRows(b.start, b.size), Cm.middleCols(b.start, b.size),
+      const StateSpace mode_sys(detail::real_modal_block(b), Bm.middleRows(b.start, b.size), Cm.middleCols(b.start, b.size),
                                 Eigen::MatrixXd::Zero(l, m), g.Ts);
       const double peak = detail::max_singular_value(frequency_response_at(mode_sys, at));
       b.dominance = std::isfinite(peak) ? peak : std::numeric_limits<double>::infinity();
@@ -113,7 +101,7 @@ ReductionResult modal_truncation(const StateSpace& sys, const ModalTruncationOpt
   bool dc_skipped = false;
   for (std::size_t i = 0; i < blocks.size(); ++i) {
     const Block& b = blocks[i];
-    const Eigen::MatrixXd a = block_A(b);
+    const Eigen::MatrixXd a = detail::real_modal_block(b);
     const auto bb = Bm.middleRows(b.start, b.size);
     const auto cc = Cm.middleCols(b.start, b.size);
     if (keep[i]) {
