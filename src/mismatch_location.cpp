@@ -820,6 +820,62 @@ void offset_test(const Common& c, const Eigen::VectorXd& r, FunctionalVariance& 
   O.flagged = zm * zm > t2_critical(0.5 * c.alpha_f, vm.dof) || zs * zs > t2_critical(0.5 * c.alpha_f, vs.dof);
 }
 
+/// The even functions of the inputs test 8 extends them with, centred: u_j^2 and
+/// |u_j| per input while the averages allow n_d - m - p >= 1, else u_j^2 only (or
+/// nothing). A constant function (a binary input's square) is left out, and |u_j|
+/// when it is proportional to u_j^2 (a ternary input).
+Eigen::MatrixXd even_input_functions(const Eigen::MatrixXd& u, double nd) {
+  const Eigen::Index N = u.rows(), m = u.cols();
+  std::vector<Eigen::VectorXd> squares, magnitudes;
+  const auto centred_if_varying = [](Eigen::VectorXd f, std::vector<Eigen::VectorXd>& into) {
+    const double scale = f.cwiseAbs().maxCoeff();
+    f.array() -= f.mean();
+    if (f.cwiseAbs().maxCoeff() > 1e-9 * scale) into.push_back(std::move(f));
+  };
+  for (Eigen::Index j = 0; j < m; ++j) {
+    const Eigen::VectorXd sq = u.col(j).array().square(), mag = u.col(j).cwiseAbs();
+    centred_if_varying(sq, squares);
+    const Eigen::VectorXd sq_c = sq.array() - sq.mean(), mag_c = mag.array() - mag.mean();
+    const double norms = sq_c.norm() * mag_c.norm();
+    if (norms > 0.0 && std::abs(sq_c.dot(mag_c)) < (1.0 - 1e-9) * norms) centred_if_varying(mag, magnitudes);
+  }
+  const auto room = [&](std::size_t p) { return nd - static_cast<double>(m) - static_cast<double>(p) >= 1.0; };
+  if (!room(squares.size() + magnitudes.size())) magnitudes.clear();
+  if (!room(squares.size())) squares.clear();
+  Eigen::MatrixXd f(N, static_cast<Eigen::Index>(squares.size() + magnitudes.size()));
+  Eigen::Index col = 0;
+  for (const auto* set : {&squares, &magnitudes})
+    for (const auto& v : *set) f.col(col++) = v;
+  return f;
+}
+
+/// Test 8 for output i: partial multiple coherence of r_i with the p even functions
+/// given u, from the H1 fits on u (test 1's joint coherence, in ch) and on [u f].
+void asymmetry_test(const Common& c, const FrfResult& extended, Eigen::Index p, Eigen::Index i, ChannelLocation& ch) {
+  AsymmetryDependence& A = ch.asymmetry;
+  A.partial_coherence = Eigen::VectorXd::Constant(c.bins, std::numeric_limits<double>::quiet_NaN());
+  if (p == 0) return;
+  std::vector<Eigen::Index> analysed;
+  for (Eigen::Index k = 1; k + 1 < c.bins; ++k) {
+    const double base = ch.joint_coherence(k), joint = extended.multiple_coherence(k, i);
+    if (!std::isfinite(base) || !std::isfinite(joint) || extended.ill_conditioned[static_cast<std::size_t>(k)] || !(base < 1.0))
+      continue;
+    A.partial_coherence(k) = std::max(0.0, (joint - base) / (1.0 - base));
+    analysed.push_back(k);
+  }
+  if (analysed.empty()) return;
+  A.tested = true;
+  A.regressors = static_cast<int>(p);
+  const double nd = 0.5 * c.nu;
+  A.threshold = beta_upper_quantile(c.alpha_f / static_cast<double>(analysed.size()), static_cast<double>(p),
+                                    nd - static_cast<double>(c.m + p));
+  for (const Eigen::Index k : analysed)
+    if (A.partial_coherence(k) > A.peak_partial_coherence) {
+      A.peak_partial_coherence = A.partial_coherence(k);
+      A.peak_hz = extended.freq_hz(k);
+    }
+  A.flagged = A.peak_partial_coherence > A.threshold;
+}
 
 void check_options(const MismatchLocationOptions& o, Eigen::Index N) {
   const std::string who = "locate_mismatch";
@@ -879,7 +935,7 @@ MismatchLocation locate_mismatch_impl(const Eigen::MatrixXd& u, const Eigen::Mat
   c.bins = nfft / 2 + 1;
   c.g = mainlobe_halfwidth(o.window);
   c.alpha = o.significance;
-  constexpr int kFamilies = 7;
+  constexpr int kFamilies = 8;
   c.alpha_f = o.significance / static_cast<double>(kFamilies * l);
   c.rho2 = window_bin_correlation(o.window, nfft, c.g + 1);
   c.o = &o;
@@ -907,6 +963,14 @@ MismatchLocation locate_mismatch_impl(const Eigen::MatrixXd& u, const Eigen::Mat
   out.segments = ps.segments;
   out.dof = ps.dof;
   out.family_level = c.alpha_f;
+  // Test 8's inputs: u extended by even functions of it, one H1 fit for all outputs.
+  const Eigen::MatrixXd even = even_input_functions(u, 0.5 * c.nu);
+  FrfResult extended;
+  if (even.cols() > 0) {
+    Eigen::MatrixXd u_extended(N, m + even.cols());
+    u_extended << u, even;
+    extended = frf(u_extended, rc, c.fs, fo);
+  }
 
   for (Eigen::Index i = 0; i < l; ++i) {
     ChannelLocation ch;
@@ -917,6 +981,7 @@ MismatchLocation locate_mismatch_impl(const Eigen::MatrixXd& u, const Eigen::Mat
     const bool residual_zero = !(ch.residual_rms > 0.0) || !(S.maxCoeff() > 0.0);
     if (residual_zero) out.warnings.push_back(ch.output + ": the residual is constant: nothing to locate");
     spectral_tests(c, fr, i, ch, S, residual_zero, out.warnings);
+    if (!residual_zero) asymmetry_test(c, extended, even.cols(), i, ch);
     if (!residual_zero) {
       const Eigen::VectorXd R = autocovariance_from_psd(S, c.fs);
       ch.long_run_variance_factor = R(0) > 0.0 ? c.fs * S(0) / R(0) : 1.0;
@@ -944,6 +1009,7 @@ MismatchLocation locate_mismatch_impl(const Eigen::MatrixXd& u, const Eigen::Mat
     fire(ch.reversal.flagged, "reversal");
     fire(ch.position.flagged, "position");
     fire(ch.offset.flagged, "offset_drift");
+    fire(ch.asymmetry.flagged, "asymmetry");
     out.outputs.push_back(std::move(ch));
   }
   out.any_mismatch = !out.fired.empty();
@@ -979,6 +1045,10 @@ std::string MismatchLocation::brief_report() const {
     if (ch.position.flagged)
       s << "\n  position-dependent mean: F = " << detail::fmt(ch.position.f_statistic, 3) << ", p = "
         << detail::fmt(ch.position.p_value, 3);
+    if (ch.asymmetry.flagged)
+      s << "\n  asymmetric (one-sided) dependence on the input: partial coherence with even functions of it "
+        << detail::fmt(ch.asymmetry.peak_partial_coherence, 3) << " at " << detail::fmt(ch.asymmetry.peak_hz) << " Hz (threshold "
+        << detail::fmt(ch.asymmetry.threshold, 3) << ")";
     if (ch.offset.flagged)
       s << "\n  offset " << detail::fmt(ch.offset.offset) << " +- " << detail::fmt(ch.offset.offset_se) << ", drift "
         << detail::fmt(ch.offset.slope_per_s) << " +- " << detail::fmt(ch.offset.slope_se) << " per s";

@@ -237,7 +237,9 @@ TEST(AugmentedModel, StoreOverflowMakesTheNominalStoreReproduceTheClippedLevel) 
     const VectorXd expected = clipped_store_seen_level(u.col(0), a, limit, spill);
     EXPECT_LT((level.col(0) - expected).cwiseAbs().maxCoeff(), 1e-12) << "spill " << spill;
     EXPECT_GT(expected.maxCoeff(), limit - 1e-12);  // the store did overflow
-    if (spill == 0.0) EXPECT_LE(level.maxCoeff(), limit + 1e-12);
+    if (spill == 0.0) {
+      EXPECT_LE(level.maxCoeff(), limit + 1e-12);
+    }
   }
   const PhysicsBlock high = physics_block("saturation", {{"limit", 2.0}, {"storage_pole", a}, {"spill", 0.5}});
   EXPECT_LT((sysid::actuator_output({high}, u, store.Ts, u.rows()) - u).cwiseAbs().maxCoeff(), 1e-12);

@@ -117,10 +117,11 @@ TEST(MismatchLocation, CorrectModelRaisesNoAlarm) {
       const auto& ch = loc.outputs[0];
       // The per-family verdicts agree with the overall one.
       const bool any = !ch.bands.empty() || !ch.peaks.empty() || ch.amplitude.flagged || ch.reversal.flagged ||
-                       ch.position.flagged || ch.offset.flagged ||
+                       ch.position.flagged || ch.offset.flagged || ch.asymmetry.flagged ||
                        std::any_of(ch.windows.begin(), ch.windows.end(), [](const auto& w) { return w.flagged; });
       EXPECT_EQ(any, loc.any_mismatch);
-      EXPECT_TRUE(ch.amplitude.tested && ch.reversal.tested && ch.position.tested);
+      EXPECT_TRUE(ch.amplitude.tested && ch.reversal.tested && ch.position.tested && ch.asymmetry.tested);
+      EXPECT_EQ(ch.asymmetry.regressors, 2);  // u^2 and |u|
       if (loc.any_mismatch) {
         ++alarms;
         why += loc.brief_report() + "\n";
@@ -187,7 +188,8 @@ TEST(MismatchLocation, MissingModeGivesFalsifiedBand) {
     EXPECT_LT(b.hi_hz, 70.0) << loc.brief_report();
   }
   // A linear mismatch does not fire the nonlinearity families.
-  EXPECT_FALSE(ch.amplitude.flagged || ch.reversal.flagged || ch.position.flagged) << loc.brief_report();
+  EXPECT_FALSE(ch.amplitude.flagged || ch.reversal.flagged || ch.position.flagged || ch.asymmetry.flagged)
+      << loc.brief_report();
   // The mode is coherent with u: it is not reported as a disturbance peak.
   for (const auto& p : ch.peaks) EXPECT_GT(std::abs(p.freq_hz - 37.0), 3.0) << loc.brief_report();
 }
@@ -273,6 +275,54 @@ TEST(MismatchLocation, CubicTermIsAmplitudeDependent) {
   EXPECT_GT(A.rms_ratio, 1.0);
   // The low set sees |y_nom| below its median: the slope there stays near 1.
   EXPECT_NEAR(A.gain_low, 1.0, 0.1);
+  // An odd nonlinearity with a symmetric (Gaussian) input is not asymmetry.
+  EXPECT_FALSE(loc.outputs[0].asymmetry.flagged) << loc.brief_report();
+}
+
+// A relief valve at the actuator: the force is capped from above only, at 1.5
+// sigma of the white input (6.7 % of the samples), y = G min(u, 1.5). The cap's
+// excess has a mean and an even part that u^2 and |u| carry and u does not; the
+// amplitude test, built for symmetric effects, need not see it.
+TEST(MismatchLocation, OneSidedCapIsAsymmetric) {
+  std::mt19937_64 rng(47);
+  const Eigen::VectorXd u = white(kN, 1.0, rng);
+  Case c = make_case(u, Eigen::VectorXd::Zero(kN));
+  const Eigen::VectorXd capped = u.cwiseMin(1.5);
+  c.r = sysid::simulate(resonator(15.0, 0.05, 1.0), capped) - c.y_nom + white(kN, 0.05, rng);
+  c.y = c.y_nom + c.r;
+  const sysid::MismatchLocation loc = run(c);
+  const auto& A = loc.outputs[0].asymmetry;
+  ASSERT_TRUE(A.tested);
+  EXPECT_TRUE(A.flagged) << loc.brief_report();
+  EXPECT_TRUE(has(loc, "asymmetry:y1"));
+  EXPECT_GT(A.peak_partial_coherence, A.threshold);
+  // The capped excess passes the resonator: it is coherent where G carries power.
+  EXPECT_LT(A.peak_hz, 60.0) << loc.brief_report();
+}
+
+// The same cap symmetric (+-1.5): an odd effect, so the asymmetry test stays
+// silent while the amplitude test fires.
+TEST(MismatchLocation, SymmetricCapIsNotAsymmetric) {
+  std::mt19937_64 rng(53);
+  const Eigen::VectorXd u = white(kN, 1.0, rng);
+  Case c = make_case(u, Eigen::VectorXd::Zero(kN));
+  const Eigen::VectorXd capped = u.cwiseMin(1.5).cwiseMax(-1.5);
+  c.r = sysid::simulate(resonator(15.0, 0.05, 1.0), capped) - c.y_nom + white(kN, 0.05, rng);
+  c.y = c.y_nom + c.r;
+  const sysid::MismatchLocation loc = run(c);
+  EXPECT_FALSE(loc.outputs[0].asymmetry.flagged) << loc.brief_report();
+  EXPECT_TRUE(loc.any_mismatch) << loc.brief_report();
+}
+
+// A binary input (+-1, as a PRBS) has constant even functions: test 8 cannot run.
+TEST(MismatchLocation, BinaryInputCannotTestAsymmetry) {
+  std::mt19937_64 rng(59);
+  Eigen::VectorXd u = white(kN, 1.0, rng);
+  u = u.array().sign().matrix();
+  const sysid::MismatchLocation loc = run(make_case(u, white(kN, 0.05, rng)));
+  EXPECT_FALSE(loc.outputs[0].asymmetry.tested);
+  EXPECT_FALSE(loc.outputs[0].asymmetry.flagged);
+  EXPECT_EQ(loc.outputs[0].asymmetry.regressors, 0);
 }
 
 // A linear gain error is not amplitude dependence (E[r | y_nom] is linear).
@@ -289,6 +339,7 @@ TEST(MismatchLocation, GainErrorIsNotAmplitudeDependence) {
   EXPECT_NEAR(ch.amplitude.gain_high, 1.1, 5.0 * ch.amplitude.gain_high_se + 1e-3);
   EXPECT_FALSE(ch.position.flagged) << loc.brief_report();  // linear in position: removed before the test
   EXPECT_FALSE(ch.reversal.flagged) << loc.brief_report();  // linear in the motion: partialled out
+  EXPECT_FALSE(ch.asymmetry.flagged) << loc.brief_report();  // linear at every frequency: partialled out
   EXPECT_TRUE(has(loc, "model_error:y1"));                   // a gain error is a model error at the resonance
 }
 
@@ -376,7 +427,7 @@ TEST(MismatchLocation, MultipleOutputsAreReportedSeparately) {
   ASSERT_EQ(loc.outputs[1].peaks.size(), 1u);
   EXPECT_TRUE(has(loc, "residual_peak:acc"));
   EXPECT_FALSE(has(loc, "residual_peak:pos"));
-  EXPECT_NEAR(loc.family_level, 0.01 / 14.0, 1e-15);  // 7 families x 2 outputs
+  EXPECT_NEAR(loc.family_level, 0.01 / 16.0, 1e-15);  // 8 families x 2 outputs
 }
 
 TEST(MismatchLocation, BadInputThrows) {

@@ -70,6 +70,20 @@
 ///    F(B - 2, nu_var) (the covariance is estimated).
 /// 7. Offset and drift: mean and least-squares slope of r_i against time, each a
 ///    t-test at alpha_f / 2 with its variance from the residual spectrum.
+/// 8. Asymmetry (a one-sided or direction-dependent nonlinearity: a relief valve, a
+///    one-sided stop, a gain that differs between push and pull): the part of r_i
+///    that even functions of the inputs explain beyond the inputs themselves. The
+///    inputs are extended by f_j = u_j^2 and |u_j| (each centred), and the partial
+///    multiple coherence of r_i with the p extra channels given the m inputs,
+///    (gamma^2_{r:[u f]} - gamma^2_{r:u}) / (1 - gamma^2_{r:u}) per bin (Bendat &
+///    Piersol, Random Data, 4th ed., sec. 7.3), is tested against Beta(p, n_d - m - p)
+///    (Goodman 1963) with Bonferroni over the analysed bins. Linear at each frequency
+///    in u first, it stays null for a linear mismatch whatever the input; for inputs
+///    with a symmetric distribution an odd nonlinearity (symmetric saturation,
+///    dead zone, cubic) leaves it silent too, as even functions are uncorrelated with
+///    odd ones, so a firing names an asymmetric effect. With few averages only the
+///    squares are used (p = m); a binary input (PRBS), whose even functions are
+///    constant, cannot be tested (`tested` false).
 ///
 /// Variance of a linear functional T = sum_t x_t r_t (tests 4-7): for a stationary
 /// residual with two-sided spectrum S2(f),
@@ -82,8 +96,8 @@
 /// bins correlated as the window implies), and the test uses F(1, nu_eff) (a t-test)
 /// instead of the normal.
 ///
-/// Family-wise error: 7 families x l outputs, each tested at alpha_f = significance /
-/// (7 l) and Bonferroni-corrected within the family (bins, windows, sub-tests), so
+/// Family-wise error: 8 families x l outputs, each tested at alpha_f = significance /
+/// (8 l) and Bonferroni-corrected within the family (bins, windows, sub-tests), so
 /// for a correct model (residual = stationary Gaussian noise, white or coloured,
 /// independent of u, with correlation time well under nfft/2 samples and a spectrum
 /// smooth over floor_halfwidth_bins) P(any_mismatch) <= significance up to the
@@ -101,8 +115,9 @@
 ///
 /// Numerical aspects: O(N log N) per output for the spectra and the regressor DFTs
 /// (about 20 real FFTs of size M ~ 2N), O(nfft * floor_halfwidth_bins^2) for the
-/// local floor fits (their F quantiles memoised on the dof); N = 20000, nfft = 2048:
-/// ~30 ms per output.
+/// local floor fits (their F quantiles memoised on the dof), plus one H1 fit with
+/// m + p inputs for test 8 (shared by the outputs); N = 20000, nfft = 2048: ~30 ms
+/// per output.
 #include <sysid/spectral/welch.hpp>
 #include <sysid/spectral/window.hpp>
 
@@ -193,6 +208,18 @@ struct PositionDependence {
   bool flagged = false;
 };
 
+/// Test 8: dependence of the residual on even functions of the inputs.
+struct AsymmetryDependence {
+  bool tested = false;        ///< false for a binary input or too few averages for the extra channels
+  int regressors = 0;         ///< p: even functions used (u_j^2 and |u_j| per input, or u_j^2 only)
+  /// bins: partial multiple coherence of r with the even functions given u; NaN where not analysed
+  Eigen::VectorXd partial_coherence;
+  double threshold = 1;       ///< family-corrected threshold on partial_coherence
+  double peak_hz = 0;         ///< bin of the largest partial coherence
+  double peak_partial_coherence = 0;
+  bool flagged = false;
+};
+
 struct OffsetDrift {
   double offset = 0, offset_se = 0;          ///< residual mean
   double slope_per_s = 0, slope_se = 0;      ///< LS slope of the residual against time
@@ -223,6 +250,7 @@ struct ChannelLocation {
   ReversalDependence reversal;
   PositionDependence position;
   OffsetDrift offset;
+  AsymmetryDependence asymmetry;
   double residual_rms = 0;            ///< about the mean
   /// Long-run variance factor of the residual, fs S2(0) / var = sum_k rho(k): 1 for
   /// white noise, > 1 for low-pass noise (how much fewer independent samples there are).
@@ -233,13 +261,14 @@ struct MismatchLocation {
   std::vector<ChannelLocation> outputs;  ///< one per output
   bool any_mismatch = false;             ///< some test of some family fired
   /// One entry per fired test family and output: "model_error:y1", "residual_peak:y1",
-  /// "time_window:y1", "amplitude:y1", "reversal:y1", "position:y1", "offset_drift:y1".
+  /// "time_window:y1", "amplitude:y1", "reversal:y1", "position:y1", "offset_drift:y1",
+  /// "asymmetry:y1".
   std::vector<std::string> fired;
   std::vector<std::string> warnings;
   Eigen::Index nfft = 0;
   Eigen::Index segments = 0;  ///< Welch averages K
   double dof = 0;             ///< Welch equivalent degrees of freedom nu (n_d = nu / 2)
-  double family_level = 0;    ///< alpha_f = significance / (7 l)
+  double family_level = 0;    ///< alpha_f = significance / (8 l)
 
   /// A few lines per output: bands, peaks, flagged windows and tests.
   std::string brief_report() const;
