@@ -13,6 +13,7 @@
 #include <unordered_set>
 
 #include "sysid/core/errors.hpp"
+#include "sysid/core/median.hpp"
 #include "sysid/io/atomic_file.hpp"
 
 namespace sysid {
@@ -427,15 +428,13 @@ IoData log_from_table(const CsvTable& table, const LogOptions& options) {
                         "time step from " + format_seconds(tk[r - 1]) + " s to " + format_seconds(tk[r]) +
                             " s is too large for a double");
     }
-    std::vector<double> sorted = steps;
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
-    const double median = sorted[sorted.size() / 2];
+    const double median_step = median(steps);
     for (Eigen::Index r = 1; r < n; ++r) {
       const double step = steps[static_cast<std::size_t>(r - 1)];
-      if (std::abs(step - median) > options.time_tolerance * median)
+      if (std::abs(step - median_step) > options.time_tolerance * median_step)
         throw DataError(src, line_of(r), static_cast<long>(time_col + 1),
                         "non-uniform time stamps: step " + format_seconds(step) + " s at line " +
-                            std::to_string(line_of(r)) + ", expected " + format_seconds(median) + " s");
+                            std::to_string(line_of(r)) + ", expected " + format_seconds(median_step) + " s");
     }
     ts = (tk[n - 1] - tk[0]) / static_cast<double>(n - 1);
     if (options.ts && std::abs(*options.ts - ts) > options.time_tolerance * *options.ts)

@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "sysid/core/input_collinearity.hpp"
+#include "sysid/core/median.hpp"
 #include "sysid/core/persistent_excitation.hpp"
 #include "sysid/pem/arx.hpp"
 #include "sysid/signal/polynomial_filter.hpp"
@@ -177,9 +178,7 @@ DataCheckResult check_data(const IoData& data, const Eigen::VectorXd& time, cons
     SamplingCheck& s = r.sampling;
     s.checked = true;
     Eigen::VectorXd steps = time.tail(time.size() - 1) - time.head(time.size() - 1);
-    std::vector<double> sorted(steps.data(), steps.data() + steps.size());
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
-    s.median_step = sorted[sorted.size() / 2];
+    s.median_step = median(std::vector<double>(steps.data(), steps.data() + steps.size()));
     for (Eigen::Index k = 0; k < steps.size(); ++k) {
       if (!(steps(k) > 0.0)) ++s.non_increasing;
       if (s.median_step > 0.0) {

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "sysid/core/median.hpp"
+
 namespace sysid {
 
 namespace {
@@ -13,19 +15,14 @@ double robust_difference_scale(const Eigen::VectorXd& x) {
   const Eigen::Index n = x.size() - 1;
   std::vector<double> d(static_cast<std::size_t>(n));
   for (Eigen::Index t = 0; t < n; ++t) d[static_cast<std::size_t>(t)] = x(t + 1) - x(t);
-  auto median_of = [](std::vector<double> v) {
-    const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-    std::nth_element(v.begin(), mid, v.end());
-    return *mid;
-  };
-  const double centre = median_of(d);
+  const double centre = median(d);
   std::vector<double> deviation(d.size());
   double sum_sq = 0.0;
   for (std::size_t i = 0; i < d.size(); ++i) {
     deviation[i] = std::abs(d[i] - centre);
     sum_sq += d[i] * d[i];
   }
-  const double mad = 1.4826 * median_of(std::move(deviation));
+  const double mad = 1.4826 * median(std::move(deviation));
   return mad > 0.0 ? mad : std::sqrt(sum_sq / static_cast<double>(d.size()));
 }
 

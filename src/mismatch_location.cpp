@@ -2,6 +2,7 @@
 // include/sysid/diagnose/mismatch_location.hpp (method and references there).
 #include <sysid/diagnose/mismatch_location.hpp>
 
+#include <sysid/core/median.hpp>
 #include <sysid/spectral/confidence.hpp>
 #include <sysid/spectral/frf.hpp>
 #include <sysid/spectral/welch.hpp>
@@ -134,15 +135,6 @@ std::vector<double> window_bin_correlation(WindowType type, Eigen::Index L, Eige
     rho2[static_cast<std::size_t>(j)] = std::norm(acc) / (s * s);
   }
   return rho2;
-}
-
-double median_of(std::vector<double> v) {
-  const std::size_t n = v.size();
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(n / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  if (n % 2 == 1) return *mid;
-  const double upper = *mid;
-  return 0.5 * (upper + *std::max_element(v.begin(), mid));
 }
 
 /// q-quantile of a sorted vector with linear interpolation.
@@ -580,7 +572,7 @@ void time_window_test(const Common& c, const Eigen::VectorXd& rc, const Eigen::V
     ch.windows[static_cast<std::size_t>(b)].t1_s = static_cast<double>(s1) * c.Ts;
   }
   const double nu_win = *std::min_element(nu_w.begin(), nu_w.end());
-  const double floor = median_of(ms) / (chi_square_quantile(0.5, nu_win) / nu_win);
+  const double floor = median(ms) / (chi_square_quantile(0.5, nu_win) / nu_win);
   const double nu_floor = nu_win * static_cast<double>(W) * 2.0 / std::numbers::pi;
   ch.window_threshold = f_upper_quantile(c.alpha_f / static_cast<double>(W), nu_win, nu_floor);
   for (Eigen::Index b = 0; b < W; ++b) {
@@ -679,7 +671,7 @@ void reversal_test(const Common& c, const Eigen::VectorXd& yn, const Eigen::Vect
   if (k == 0) {
     std::vector<double> spacing;
     for (std::size_t q = 1; q < rev.size(); ++q) spacing.push_back(static_cast<double>(rev[q] - rev[q - 1]));
-    k = std::max<Eigen::Index>(1, static_cast<Eigen::Index>(std::lround(0.1 * median_of(spacing))));
+    k = std::max<Eigen::Index>(1, static_cast<Eigen::Index>(std::lround(0.1 * median(spacing))));
   }
   Rv.halfwidth = k;
   std::vector<char> near(static_cast<std::size_t>(N), 0);

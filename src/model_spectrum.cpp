@@ -1,4 +1,5 @@
 #include <sysid/core/frequency_response.hpp>
+#include <sysid/core/median.hpp>
 #include <sysid/core/poles_zeros.hpp>
 #include <sysid/spectral/model_spectrum.hpp>
 
@@ -107,10 +108,7 @@ SpectrumAgreement spectrum_agreement(const Eigen::VectorXd& estimate, const Eige
   for (const double d : db) sum_abs += std::abs(d);
   a.mean_abs_db = sum_abs / static_cast<double>(db.size());
   a.fraction_inside = static_cast<double>(inside) / static_cast<double>(db.size());
-  const auto mid = db.begin() + static_cast<std::ptrdiff_t>(db.size() / 2);
-  std::nth_element(db.begin(), mid, db.end());
-  a.median_db = *mid;
-  if (db.size() % 2 == 0) a.median_db = 0.5 * (a.median_db + *std::max_element(db.begin(), mid));
+  a.median_db = median(std::move(db));
   return a;
 }
 

@@ -47,6 +47,7 @@
 ///   full matrix, is the right estimate (it works for any mix of experiments whose
 ///   summed G_uu is well conditioned).
 #include <sysid/core/io_data.hpp>
+#include <sysid/core/median.hpp>
 #include <sysid/spectral/confidence.hpp>
 #include <sysid/spectral/welch.hpp>
 
@@ -114,10 +115,7 @@ struct FrfResult {
     for (const auto& m : coherence)
       for (Eigen::Index k = 0; k < m.size(); ++k)
         if (std::isfinite(m(k))) c.push_back(m(k));
-    if (!c.empty()) {
-      std::nth_element(c.begin(), c.begin() + static_cast<std::ptrdiff_t>(c.size() / 2), c.end());
-      s << "\nmedian coherence " << c[c.size() / 2];
-    }
+    if (!c.empty()) s << "\nmedian coherence " << median(std::move(c));
     for (const auto& w : warnings) s << "\nwarning: " << w;
     return s.str();
   }
