@@ -10,6 +10,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+
 #include "random_matrices.hpp"
 
 namespace test_unit_reduce_balanced_truncation {
@@ -18,14 +19,6 @@ namespace {
 
 using Eigen::MatrixXd;
 using sysid::test::kPi;
-
-MatrixXd random_matrix(int r, int c, std::mt19937_64& rng) {
-  std::normal_distribution<double> g;
-  MatrixXd M(r, c);
-  for (int i = 0; i < r; ++i)
-    for (int j = 0; j < c; ++j) M(i, j) = g(rng);
-  return M;
-}
 
 /// Random stable MIMO system of order n: complex pairs with damping log-uniform in
 /// [zeta_lo, 0.7] and natural frequencies log-uniform over two decades, plus real
@@ -49,10 +42,10 @@ sysid::StateSpace random_stable_system(int n, int m, int l, bool discrete, doubl
       k += 1;
     }
   }
-  MatrixXd T = random_matrix(n, n, rng) + 3.0 * MatrixXd::Identity(n, n);
+  MatrixXd T = sysid::test::randn(rng, n, n) + 3.0 * MatrixXd::Identity(n, n);
   const MatrixXd Ti = T.inverse();
-  return sysid::StateSpace(T * A * Ti, T * random_matrix(n, m, rng), random_matrix(l, n, rng) * Ti,
-                           random_matrix(l, m, rng), Ts);
+  return sysid::StateSpace(T * A * Ti, T * sysid::test::randn(rng, n, m), sysid::test::randn(rng, l, n) * Ti,
+                           sysid::test::randn(rng, l, m), Ts);
 }
 
 TEST(ReduceBalancedTruncation, HinfErrorWithinBoundOnRandomSweep) {
@@ -127,9 +120,9 @@ TEST(ReduceBalancedTruncation, UnstablePartKeptWhole) {
   A.topLeftCorner(12, 12) = s.A;
   A.block(12, 12, 2, 2) << 1.05 * std::cos(0.2), 1.05 * std::sin(0.2), -1.05 * std::sin(0.2), 1.05 * std::cos(0.2);
   A(14, 14) = 1.0;
-  B << s.B, random_matrix(3, 2, rng);
-  C << s.C, random_matrix(2, 3, rng);
-  MatrixXd T = random_matrix(n, n, rng) + 3.0 * MatrixXd::Identity(n, n);
+  B << s.B, sysid::test::randn(rng, 3, 2);
+  C << s.C, sysid::test::randn(rng, 2, 3);
+  MatrixXd T = sysid::test::randn(rng, n, n) + 3.0 * MatrixXd::Identity(n, n);
   const MatrixXd Ti = T.inverse();
   const sysid::StateSpace su(T * A * Ti, T * B, C * Ti, s.D, s.Ts);
   sysid::BalancedTruncationOptions o;
@@ -201,9 +194,9 @@ TEST(ReduceBalancedTruncation, NonMinimalModelOrderCapped) {
   const int n = 10;
   MatrixXd A = MatrixXd::Zero(n, n), B = MatrixXd::Zero(n, 1), C(1, n);
   A.topLeftCorner(6, 6) = s.A;
-  A.bottomRightCorner(4, 4) = -5.0 * MatrixXd::Identity(4, 4) + 0.1 * random_matrix(4, 4, rng);
+  A.bottomRightCorner(4, 4) = -5.0 * MatrixXd::Identity(4, 4) + 0.1 * sysid::test::randn(rng, 4, 4);
   B.topRows(6) = s.B;
-  C << s.C, random_matrix(1, 4, rng);
+  C << s.C, sysid::test::randn(rng, 1, 4);
   sysid::BalancedTruncationOptions o;
   o.order = 9;
   const sysid::ReductionResult res = sysid::balanced_truncation(sysid::StateSpace(A, B, C, s.D, 0.0), o);

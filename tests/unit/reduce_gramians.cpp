@@ -9,6 +9,8 @@
 #include <numbers>
 #include <random>
 
+#include "random_matrices.hpp"
+
 namespace test_unit_reduce_gramians {
 
 namespace {
@@ -28,14 +30,6 @@ MatrixXd random_stable(int n, bool discrete, double margin, std::mt19937_64& rng
   return A;
 }
 
-MatrixXd random_matrix(int r, int c, std::mt19937_64& rng) {
-  std::normal_distribution<double> g;
-  MatrixXd M(r, c);
-  for (int i = 0; i < r; ++i)
-    for (int j = 0; j < c; ++j) M(i, j) = g(rng);
-  return M;
-}
-
 double residual(const MatrixXd& A, const MatrixXd& W, const MatrixXd& BBt, bool discrete) {
   const MatrixXd R = discrete ? MatrixXd(A * W * A.transpose() - W + BBt) : MatrixXd(A * W + W * A.transpose() + BBt);
   // Backward-error scale: a backward stable solver leaves a residual of
@@ -51,7 +45,7 @@ TEST(ReduceGramians, ResidualsSmallOnRandomStableSystems) {
       for (int m : {1, 3, 9}) {  // m = 9 > n for small n exercises the column compression
         for (double margin : {0.3, 1e-3}) {  // 1e-3: lightly damped / near the unit circle
           const MatrixXd A = random_stable(n, discrete, margin, rng);
-          const MatrixXd B = random_matrix(n, m, rng), C = random_matrix(m, n, rng);
+          const MatrixXd B = sysid::test::randn(rng, n, m), C = sysid::test::randn(rng, m, n);
           const MatrixXd Lc = sysid::controllability_gramian_factor(A, B, discrete);
           const MatrixXd Lo = sysid::observability_gramian_factor(A, C, discrete);
           ASSERT_EQ(Lc.rows(), n);
@@ -97,7 +91,7 @@ TEST(ReduceGramians, LightlyDampedOscillatorAnalytic) {
 TEST(ReduceGramians, BothFactorsFromOneSchurMatchSeparateCalls) {
   std::mt19937_64 rng(5);
   const MatrixXd A = random_stable(12, true, 0.05, rng);
-  const MatrixXd B = random_matrix(12, 2, rng), C = random_matrix(3, 12, rng);
+  const MatrixXd B = sysid::test::randn(rng, 12, 2), C = sysid::test::randn(rng, 3, 12);
   const sysid::StateSpace s(A, B, C, MatrixXd::Zero(3, 2), 0.01);
   const sysid::GramianFactors f = sysid::gramian_factors(s);
   const MatrixXd Wc = f.controllability * f.controllability.transpose();

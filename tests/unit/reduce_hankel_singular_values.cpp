@@ -9,19 +9,13 @@
 #include <cmath>
 #include <random>
 
+#include "random_matrices.hpp"
+
 namespace test_unit_reduce_hankel_singular_values {
 
 namespace {
 
 using Eigen::MatrixXd;
-
-MatrixXd random_matrix(int r, int c, std::mt19937_64& rng) {
-  std::normal_distribution<double> g;
-  MatrixXd M(r, c);
-  for (int i = 0; i < r; ++i)
-    for (int j = 0; j < c; ++j) M(i, j) = g(rng);
-  return M;
-}
 
 /// Random discrete system: modes at radius in [r_lo, r_hi], rotated by a random
 /// similarity of moderate condition.
@@ -33,10 +27,10 @@ sysid::StateSpace random_discrete(int pairs, int m, int l, double r_lo, double r
     const double r = r_lo + (r_hi - r_lo) * u(rng), th = 0.05 + 3.0 * u(rng);
     A.block(2 * k, 2 * k, 2, 2) << r * std::cos(th), r * std::sin(th), -r * std::sin(th), r * std::cos(th);
   }
-  MatrixXd T = random_matrix(n, n, rng) + 3.0 * MatrixXd::Identity(n, n);
+  MatrixXd T = sysid::test::randn(rng, n, n) + 3.0 * MatrixXd::Identity(n, n);
   const MatrixXd Ti = T.inverse();
-  return sysid::StateSpace(T * A * Ti, T * random_matrix(n, m, rng), random_matrix(l, n, rng) * Ti,
-                           random_matrix(l, m, rng), 0.001);
+  return sysid::StateSpace(T * A * Ti, T * sysid::test::randn(rng, n, m), sysid::test::randn(rng, l, n) * Ti,
+                           sysid::test::randn(rng, l, m), 0.001);
 }
 
 TEST(ReduceHankelSingularValues, FirstOrderAnalytic) {
@@ -74,7 +68,7 @@ TEST(ReduceHankelSingularValues, InvariantUnderStateTransformationAndMatchDenseF
     ASSERT_EQ(h.size(), n);
     for (int i = 1; i < n; ++i) EXPECT_GE(h(i - 1), h(i));
     // Badly scaled similarity (column scales over 2 decades): HSV unchanged.
-    MatrixXd T = random_matrix(n, n, rng) + 3.0 * MatrixXd::Identity(n, n);
+    MatrixXd T = sysid::test::randn(rng, n, n) + 3.0 * MatrixXd::Identity(n, n);
     for (int j = 0; j < n; ++j) T.col(j) *= std::pow(10.0, -1.0 + 2.0 * j / std::max(1, n - 1));
     const MatrixXd Ti = T.inverse();
     const sysid::StateSpace st(T * s.A * Ti, T * s.B, s.C * Ti, s.D, s.Ts);
@@ -102,9 +96,9 @@ sysid::StateSpace with_unstable_part(const sysid::StateSpace& s, const MatrixXd&
   MatrixXd A = MatrixXd::Zero(n, n), B(n, m), C(l, n);
   A.topLeftCorner(ns, ns) = s.A;
   A.bottomRightCorner(nu, nu) = Au;
-  B << s.B, random_matrix(nu, m, rng);
-  C << s.C, random_matrix(l, nu, rng);
-  MatrixXd T = random_matrix(n, n, rng) + 3.0 * MatrixXd::Identity(n, n);
+  B << s.B, sysid::test::randn(rng, nu, m);
+  C << s.C, sysid::test::randn(rng, l, nu);
+  MatrixXd T = sysid::test::randn(rng, n, n) + 3.0 * MatrixXd::Identity(n, n);
   const MatrixXd Ti = T.inverse();
   return sysid::StateSpace(T * A * Ti, T * B, C * Ti, s.D, s.Ts);
 }
