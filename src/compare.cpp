@@ -3,6 +3,8 @@
 // solver used here are heavy to instantiate in every file that includes the header.
 #include <sysid/validate/compare.hpp>
 
+#include <sysid/core/simulate.hpp>
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>

@@ -17,16 +17,10 @@
 /// stored in the model file), and returns y_hat in the units of the log.
 /// estimate_initial_state() and predict_k_step() work on offset-free data.
 #include <sysid/core/io_data.hpp>
-#include <sysid/core/simulate.hpp>
 #include <sysid/core/state_space.hpp>
 #include <sysid/validate/fit.hpp>
 
 #include <Eigen/Dense>
-#include <algorithm>
-#include <cmath>
-#include <limits>
-#include <stdexcept>
-#include <string>
 
 namespace sysid {
 
