@@ -812,10 +812,12 @@ void offset_test(const Common& c, const Eigen::VectorXd& r, FunctionalVariance& 
   O.flagged = zm * zm > t2_critical(0.5 * c.alpha_f, vm.dof) || zs * zs > t2_critical(0.5 * c.alpha_f, vs.dof);
 }
 
-/// The even functions of the inputs test 8 extends them with, centred: u_j^2 and
-/// |u_j| per input while the averages allow n_d - m - p >= 1, else u_j^2 only (or
-/// nothing). A constant function (a binary input's square) is left out, and |u_j|
-/// when it is proportional to u_j^2 (a ternary input).
+/// The even functions of the inputs test 8 extends them with, centred: with
+/// d_j = u_j - mean(u_j) (even about the operating point, so that an input with
+/// an offset does not make |u_j| a copy of u_j), d_j^2 and |d_j| per input while
+/// the averages allow n_d - m - p >= 1, else d_j^2 only (or nothing). A constant
+/// function (a binary input's square) is left out, and |d_j| when it is
+/// proportional to d_j^2 (a ternary input).
 Eigen::MatrixXd even_input_functions(const Eigen::MatrixXd& u, double nd) {
   const Eigen::Index N = u.rows(), m = u.cols();
   std::vector<Eigen::VectorXd> squares, magnitudes;
@@ -825,7 +827,8 @@ Eigen::MatrixXd even_input_functions(const Eigen::MatrixXd& u, double nd) {
     if (f.cwiseAbs().maxCoeff() > 1e-9 * scale) into.push_back(std::move(f));
   };
   for (Eigen::Index j = 0; j < m; ++j) {
-    const Eigen::VectorXd sq = u.col(j).array().square(), mag = u.col(j).cwiseAbs();
+    const Eigen::VectorXd d = u.col(j).array() - u.col(j).mean();
+    const Eigen::VectorXd sq = d.array().square(), mag = d.cwiseAbs();
     centred_if_varying(sq, squares);
     const Eigen::VectorXd sq_c = sq.array() - sq.mean(), mag_c = mag.array() - mag.mean();
     const double norms = sq_c.norm() * mag_c.norm();

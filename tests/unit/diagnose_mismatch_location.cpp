@@ -314,6 +314,22 @@ TEST(MismatchLocation, SymmetricCapIsNotAsymmetric) {
   EXPECT_TRUE(loc.any_mismatch) << loc.brief_report();
 }
 
+// An input with an offset (a unipolar command, 3 +- 1): the even functions are
+// taken about its mean, so the one-sided cap is found as with a zero-mean input
+// (about the origin, |u| would be a copy of u and every bin singular).
+TEST(MismatchLocation, OneSidedCapIsFoundOnAnOffsetInput) {
+  std::mt19937_64 rng(61);
+  const Eigen::VectorXd u = (white(kN, 1.0, rng).array() + 3.0).matrix();
+  Case c = make_case(u, Eigen::VectorXd::Zero(kN));
+  c.r = sysid::simulate(resonator(15.0, 0.05, 1.0), Eigen::MatrixXd(u.cwiseMin(4.5))) - c.y_nom + white(kN, 0.05, rng);
+  c.y = c.y_nom + c.r;
+  const sysid::MismatchLocation loc = run(c);
+  const auto& A = loc.outputs[0].asymmetry;
+  ASSERT_TRUE(A.tested);
+  EXPECT_EQ(A.regressors, 2);
+  EXPECT_TRUE(A.flagged) << loc.brief_report();
+}
+
 // A binary input (+-1, as a PRBS) has constant even functions: test 8 cannot run.
 TEST(MismatchLocation, BinaryInputCannotTestAsymmetry) {
   std::mt19937_64 rng(59);

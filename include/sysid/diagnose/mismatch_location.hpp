@@ -73,7 +73,8 @@
 /// 8. Asymmetry (a one-sided or direction-dependent nonlinearity: a relief valve, a
 ///    one-sided stop, a gain that differs between push and pull): the part of r_i
 ///    that even functions of the inputs explain beyond the inputs themselves. The
-///    inputs are extended by f_j = u_j^2 and |u_j| (each centred), and the partial
+///    inputs are extended by f_j = d_j^2 and |d_j|, d_j = u_j - mean(u_j) (each
+///    centred; even about the operating point), and the partial
 ///    multiple coherence of r_i with the p extra channels given the m inputs,
 ///    (gamma^2_{r:[u f]} - gamma^2_{r:u}) / (1 - gamma^2_{r:u}) per bin (Bendat &
 ///    Piersol, Random Data, 4th ed., sec. 7.3), is tested against Beta(p, n_d - m - p)
