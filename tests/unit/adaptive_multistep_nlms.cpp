@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "random_matrices.hpp"
+
 namespace test_unit_adaptive_multistep_nlms {
 
 namespace {
@@ -48,19 +50,10 @@ void add_noise(MatrixXd& y, double snr_db, std::uint64_t seed) {
   }
 }
 
-MatrixXd white(Eigen::Index N, Eigen::Index cols, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g(0.0, 1.0);
-  MatrixXd x(N, cols);
-  for (Eigen::Index c = 0; c < cols; ++c)
-    for (Eigen::Index k = 0; k < N; ++k) x(k, c) = g(rng);
-  return x;
-}
-
 /// AR(1) coloured noise u(k) = a u(k-1) + w(k): eigenvalue spread of its
 /// correlation matrix ~ ((1+a)/(1-a))^2 = 361 for a = 0.9.
 MatrixXd coloured(Eigen::Index N, double a, std::uint64_t seed) {
-  MatrixXd w = white(N, 1, seed);
+  MatrixXd w = sysid::test::white_noise(N, 1, seed);
   for (Eigen::Index k = 1; k < N; ++k) w(k, 0) += a * w(k - 1, 0);
   return w;
 }
@@ -117,7 +110,7 @@ TEST(AdaptiveMultistepNlms, ConvergesToTrueFirAt30dBSnrMimo) {
   // margin of ~5 dB for the fluctuation of a finite average.
   const int L = 96, m = 2, l = 3;
   const auto h = random_fir(L, l, m, 0.04, 1);
-  const MatrixXd u = white(20000, m, 2);
+  const MatrixXd u = sysid::test::white_noise(20000, m, 2);
   MatrixXd y = convolve(h, u);
   add_noise(y, 30.0, 3);
   for (const std::vector<double>& gamma : {std::vector<double>{1.0}, std::vector<double>{0.5, 0.3, 0.2}}) {
@@ -146,7 +139,7 @@ TEST(AdaptiveMultistepNlms, SisoLongFirConvergesBelowMinus30dB) {
   // The paper's use: 256 taps, one actuator, white excitation, 30 dB SNR.
   const int L = 256;
   const auto h = random_fir(L, 1, 1, 0.02, 11);
-  const MatrixXd u = white(40000, 1, 12);
+  const MatrixXd u = sysid::test::white_noise(40000, 1, 12);
   MatrixXd y = convolve(h, u);
   add_noise(y, 30.0, 13);
   sysid::MultiStepNlmsOptions o;
@@ -222,7 +215,7 @@ TEST(AdaptiveMultistepNlms, MatchesDirectTranscriptionOfTheUpdate) {
   // formula: compare with a naive implementation on a short MIMO record
   // (rounding differs only in summation order: 1e-10 relative).
   const auto h = random_fir(7, 2, 3, 0.2, 21);
-  const MatrixXd u = white(400, 3, 22);
+  const MatrixXd u = sysid::test::white_noise(400, 3, 22);
   MatrixXd y = convolve(h, u);
   add_noise(y, 20.0, 23);
   for (const std::vector<double>& gamma :
@@ -243,7 +236,7 @@ TEST(AdaptiveMultistepNlms, MatchesDirectTranscriptionOfTheUpdate) {
 
 TEST(AdaptiveMultistepNlms, StreamingEqualsBatch) {
   const auto h = random_fir(40, 2, 1, 0.1, 31);
-  const MatrixXd u = white(3000, 1, 32);
+  const MatrixXd u = sysid::test::white_noise(3000, 1, 32);
   MatrixXd y = convolve(h, u);
   add_noise(y, 30.0, 33);
   sysid::MultiStepNlmsOptions o;
@@ -317,7 +310,7 @@ TEST(AdaptiveMultistepNlms, BadOptionsThrowWithClearMessages) {
   o.true_fir = {MatrixXd::Zero(2, 1)};
   expect_throw(o, "true_fir[0] must be 1x1");
 
-  const MatrixXd u = white(100, 1, 1), y = white(99, 1, 2);
+  const MatrixXd u = sysid::test::white_noise(100, 1, 1), y = sysid::test::white_noise(99, 1, 2);
   EXPECT_THROW(sysid::multistep_nlms(u, y, {}), std::invalid_argument);
   sysid::MultiStepNlms est(2, 1, {});
   EXPECT_THROW(est.update(VectorXd::Zero(1), VectorXd::Zero(1)), std::invalid_argument);
@@ -325,9 +318,9 @@ TEST(AdaptiveMultistepNlms, BadOptionsThrowWithClearMessages) {
 }
 
 TEST(AdaptiveMultistepNlms, WarnsAboutZeroInputAndShortRecord) {
-  MatrixXd u = white(500, 2, 41);
+  MatrixXd u = sysid::test::white_noise(500, 2, 41);
   u.col(1).setZero();
-  const MatrixXd y = white(500, 1, 42);
+  const MatrixXd y = sysid::test::white_noise(500, 1, 42);
   sysid::MultiStepNlmsOptions o;
   o.taps = 64;
   const sysid::MultiStepNlmsResult r = sysid::multistep_nlms(u, y, o);
