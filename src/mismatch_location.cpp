@@ -812,27 +812,33 @@ void offset_test(const Common& c, const Eigen::VectorXd& r, FunctionalVariance& 
   O.flagged = zm * zm > t2_critical(0.5 * c.alpha_f, vm.dof) || zs * zs > t2_critical(0.5 * c.alpha_f, vs.dof);
 }
 
+/// f - mean(f) when f varies beyond round-off of its own size, else empty (a
+/// constant function: a binary input's square).
+Eigen::VectorXd centred_if_varying(const Eigen::VectorXd& f) {
+  Eigen::VectorXd centred = f.array() - f.mean();
+  if (!(centred.cwiseAbs().maxCoeff() > 1e-9 * f.cwiseAbs().maxCoeff())) return {};
+  return centred;
+}
+
 /// The even functions of the inputs test 8 extends them with, centred: with
 /// d_j = u_j - mean(u_j) (even about the operating point, so that an input with
 /// an offset does not make |u_j| a copy of u_j), d_j^2 and |d_j| per input while
 /// the averages allow n_d - m - p >= 1, else d_j^2 only (or nothing). A constant
-/// function (a binary input's square) is left out, and |d_j| when it is
-/// proportional to d_j^2 (a ternary input).
+/// function is left out, and |d_j| when it is proportional to d_j^2 (a ternary
+/// input).
 Eigen::MatrixXd even_input_functions(const Eigen::MatrixXd& u, double nd) {
   const Eigen::Index N = u.rows(), m = u.cols();
   std::vector<Eigen::VectorXd> squares, magnitudes;
-  const auto centred_if_varying = [](Eigen::VectorXd f, std::vector<Eigen::VectorXd>& into) {
-    const double scale = f.cwiseAbs().maxCoeff();
-    f.array() -= f.mean();
-    if (f.cwiseAbs().maxCoeff() > 1e-9 * scale) into.push_back(std::move(f));
-  };
   for (Eigen::Index j = 0; j < m; ++j) {
     const Eigen::VectorXd d = u.col(j).array() - u.col(j).mean();
-    const Eigen::VectorXd sq = d.array().square(), mag = d.cwiseAbs();
-    centred_if_varying(sq, squares);
-    const Eigen::VectorXd sq_c = sq.array() - sq.mean(), mag_c = mag.array() - mag.mean();
-    const double norms = sq_c.norm() * mag_c.norm();
-    if (norms > 0.0 && std::abs(sq_c.dot(mag_c)) < (1.0 - 1e-9) * norms) centred_if_varying(mag, magnitudes);
+    Eigen::VectorXd square = centred_if_varying(d.array().square().matrix());
+    Eigen::VectorXd magnitude = centred_if_varying(d.cwiseAbs());
+    // |d| is constant when d^2 is, so a kept magnitude always has a square beside it.
+    if (square.size() == 0) continue;
+    const bool proportional =
+        magnitude.size() == 0 || std::abs(square.dot(magnitude)) >= (1.0 - 1e-9) * square.norm() * magnitude.norm();
+    squares.push_back(std::move(square));
+    if (!proportional) magnitudes.push_back(std::move(magnitude));
   }
   const auto room = [&](std::size_t p) { return nd - static_cast<double>(m) - static_cast<double>(p) >= 1.0; };
   if (!room(squares.size() + magnitudes.size())) magnitudes.clear();
@@ -976,8 +982,8 @@ MismatchLocation locate_mismatch_impl(const Eigen::MatrixXd& u, const Eigen::Mat
     const bool residual_zero = !(ch.residual_rms > 0.0) || !(S.maxCoeff() > 0.0);
     if (residual_zero) out.warnings.push_back(ch.output + ": the residual is constant: nothing to locate");
     spectral_tests(c, fr, i, ch, S, residual_zero, out.warnings);
-    if (!residual_zero) asymmetry_test(c, extended, even.cols(), i, ch);
     if (!residual_zero) {
+      asymmetry_test(c, extended, even.cols(), i, ch);
       const Eigen::VectorXd R = autocovariance_from_psd(S, c.fs);
       ch.long_run_variance_factor = R(0) > 0.0 ? c.fs * S(0) / R(0) : 1.0;
       time_window_test(c, rci, R, ch);

@@ -301,7 +301,7 @@ TEST(MismatchLocation, OneSidedCapIsAsymmetric) {
 }
 
 // The same cap symmetric (+-1.5): an odd effect, so the asymmetry test stays
-// silent while the amplitude test fires.
+// silent while the mismatch is still found (as a model error near the resonance).
 TEST(MismatchLocation, SymmetricCapIsNotAsymmetric) {
   std::mt19937_64 rng(53);
   const Eigen::VectorXd u = white(kN, 1.0, rng);

@@ -212,7 +212,7 @@ struct PositionDependence {
 /// Test 8: dependence of the residual on even functions of the inputs.
 struct AsymmetryDependence {
   bool tested = false;        ///< false for a binary input or too few averages for the extra channels
-  int regressors = 0;         ///< p: even functions used (u_j^2 and |u_j| per input, or u_j^2 only)
+  int regressors = 0;         ///< p: even functions used (d_j^2 and |d_j| per input, d_j = u_j - mean, or d_j^2 only)
   /// bins: partial multiple coherence of r with the even functions given u; NaN where not analysed
   Eigen::VectorXd partial_coherence;
   double threshold = 1;       ///< family-corrected threshold on partial_coherence
