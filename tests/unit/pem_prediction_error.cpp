@@ -1,11 +1,14 @@
 // Prediction-error identification (pem/prediction_error.hpp): the analytic
 // Jacobian against central finite differences for every structure; ARMAX,
 // ARMA and OE recover their parameters within the reported standard errors;
+// the subspace start of ARMAX (MISO) is near the truth before any iteration;
 // the stability helpers; bad orders rejected.
 #include <sysid/pem/prediction_error.hpp>
 #include <sysid/signal/polynomial_filter.hpp>
 
 #include <gtest/gtest.h>
+
+#include <iostream>
 
 #include "random_systems.hpp"
 
@@ -100,6 +103,37 @@ TEST(PredictionError, ArmaxRecoversItsParameters) {
   EXPECT_NEAR(r.model.noise_variance, 0.25, 0.25 * 0.05);
 }
 
+TEST(PredictionError, SubspaceStartAloneIsNearTheTruthForEachInput) {
+  // Two inputs: each B_i comes from its own rank-one determinant identity, C from
+  // det(zI - A + KC). No iterations: this is the start itself.
+  const PolynomialModel truth = make_model(Eigen::Vector3d(1.0, -1.5, 0.7), {Eigen::Vector2d(1.0, 0.5), Eigen::Vector2d(0.3, -0.2)},
+                                           {1, 1}, {kOne, kOne}, Eigen::Vector3d(1.0, -0.6, 0.2), kOne);
+  const Eigen::Index n = 20000;
+  const Eigen::MatrixXd u = test::white_noise(n, 2, 21);
+  const Eigen::VectorXd y = simulate_polynomial(truth, u, test::white_noise(n, 1, 22, 0.5).col(0));
+  PemOptions opt;
+  opt.na = 2;
+  opt.nb = {2, 2};
+  opt.nc = 2;
+  opt.nk = {1, 1};
+  opt.start = PemStart::subspace;
+  opt.max_iterations = 0;
+  const PemResult start = pem(IoData(u, y, 1.0), opt);
+  EXPECT_EQ(start.start, "subspace");
+  EXPECT_EQ(start.iterations, 0);
+  const Eigen::VectorXd err = pack_parameters(start.model) - pack_parameters(truth);
+  for (Eigen::Index k = 0; k < err.size(); ++k) EXPECT_LT(std::abs(err(k)), 0.05) << "parameter " << k;
+  std::cout << "subspace start: largest parameter error " << err.cwiseAbs().maxCoeff() << "\n";
+  // Iterated from there, the minimum is the truth within the standard errors.
+  opt.max_iterations = 100;
+  const PemResult r = pem(IoData(u, y, 1.0), opt);
+  ASSERT_EQ(r.status, PemResult::Status::converged) << r.termination;
+  EXPECT_LE(r.final_cost, r.initial_cost);
+  const Eigen::VectorXd final_err = pack_parameters(r.model) - pack_parameters(truth);
+  for (Eigen::Index k = 0; k < final_err.size(); ++k)
+    EXPECT_LT(std::abs(final_err(k)), 4.0 * std::sqrt(r.covariance(k, k))) << "parameter " << k;
+}
+
 TEST(PredictionError, ArmaRecoversItsParameters) {
   const PolynomialModel truth = make_model(Eigen::Vector3d(1.0, -0.9, 0.5), {}, {}, {}, Eigen::Vector2d(1.0, 0.7), kOne);
   const Eigen::Index n = 20000;
@@ -168,6 +202,14 @@ TEST(PredictionError, BadOrdersAreRejected) {
   opt.nc = 1;
   opt.nf = {2};
   EXPECT_THROW(pem(data, opt), std::invalid_argument);  // A together with F
+  opt = PemOptions{};
+  opt.na = 2;
+  opt.nc = 1;
+  opt.start = PemStart::subspace;
+  const IoData series(Eigen::MatrixXd(200, 0), test::white_noise(200, 1, 2), 1.0);
+  EXPECT_THROW(pem(series, opt), std::invalid_argument);  // the subspace start needs an input (ARMA)
+  opt.start = PemStart::output_error;
+  EXPECT_THROW(pem(series, opt), std::invalid_argument);  // so does the output-error start
   opt = PemOptions{};
   opt.na = 150;
   opt.nb = {150};
