@@ -18,10 +18,12 @@
 ///      d eps / d f_ik =  D/(C F_i)    w_i(t-k),  w_i = B_i/F_i u_i(t-nk_i)
 ///      d eps / d c_k  = -1/C          eps(t-k)
 ///      d eps / d d_k  =  1/C          v(t-k),    v = A y - sum_i w_i
-///    all filtered from rest over each experiment. Rows of [J eps] are streamed
-///    through a Householder QR (core/streaming_qr.hpp), so each iteration costs
-///    O(N p^2) time and O(p^2) memory; the damped steps for several lambda reuse
-///    the triangular factor.
+///    all filtered from rest over each experiment. Each column is a shifted
+///    copy of one of these few filtered signals, so the rows of [J eps] are
+///    made chunk by chunk from them and streamed through a Householder QR
+///    (core/streaming_qr.hpp): each iteration costs O(N p^2) time and
+///    O(p^2 + N) memory (the N x p Jacobian is never held); the damped steps for
+///    several lambda reuse the triangular factor.
 ///  - Denominators C, D, F_i are kept strictly stable (roots of the polynomial in
 ///    z inside the unit circle): a step that leaves the stable region is
 ///    first shortened along its direction (halved up to four times: the
