@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <iomanip>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -739,9 +740,12 @@ PemResult pem(IoData data, const PemOptions& options) {
   const double sigma2 = 2.0 * cost / std::max(1.0, total - static_cast<double>(p));
   const Eigen::MatrixXd r_inv = r11.completeOrthogonalDecomposition().pseudoInverse();
   Eigen::MatrixXd covariance = sigma2 * r_inv * r_inv.transpose();
-  if (res.condition > 1e10)
-    res.warnings.push_back("pem: the Jacobian is ill-conditioned at the solution (condition " + std::to_string(res.condition) +
-                           "): some parameters are poorly determined (orders too high, or common factors)");
+  if (res.condition > 1e10) {
+    std::ostringstream w;
+    w << "pem: the Jacobian is ill-conditioned at the solution (condition " << std::setprecision(3) << res.condition
+      << "): some parameters are poorly determined (orders too high, or common factors)";
+    res.warnings.push_back(w.str());
+  }
 
   // Back to original units: B_i scales by sy / su_i, the variance by sy^2.
   Eigen::VectorXd unit = Eigen::VectorXd::Ones(p);
