@@ -1,5 +1,6 @@
 // Tests for sysid::excitation_order and insufficient_excitation_warnings
-// (include/sysid/core/persistent_excitation.hpp).
+// (include/sysid/core/persistent_excitation.hpp), including its Gram-based
+// singular values against a direct SVD of the Hankel matrix.
 #include <sysid/core/persistent_excitation.hpp>
 
 #include <gtest/gtest.h>
@@ -82,6 +83,49 @@ TEST(PersistentExcitation, ScaleDoesNotChangeTheOrder) {
     const VectorXd u = scale * sines(4000, {0.05, 0.2});
     EXPECT_EQ(sysid::excitation_order(log_of({u}), 0, o).order, 4) << "scale " << scale;
   }
+}
+
+/// Relative singular values of the mean-removed Hankel matrix with n columns, by a
+/// direct SVD of the explicit matrix (the reference for the Gram-based ones).
+VectorXd hankel_singular_values_by_svd(const VectorXd& u, Eigen::Index n) {
+  const Eigen::Index rows = u.size() - n + 1;
+  const double mean = u.mean();
+  Eigen::MatrixXd h(rows, n);
+  for (Eigen::Index j = 0; j < n; ++j) h.col(j) = u.segment(j, rows).array() - mean;
+  VectorXd sv = Eigen::BDCSVD<Eigen::MatrixXd>(h).singularValues();
+  return sv / sv(0);
+}
+
+TEST(PersistentExcitation, GramSingularValuesMatchADirectSvd) {
+  // The Gram route squares the condition number; the decision only needs the
+  // relative singular values well above 1e-5. Checked on a smooth low-pass
+  // signal (singular values decaying over many decades), sines in weak noise
+  // (a cliff) and white noise.
+  const Eigen::Index n = 40, samples = 6000;
+  VectorXd smooth = white(samples, 7);
+  for (int pass = 0; pass < 4; ++pass)
+    for (Eigen::Index t = 1; t < samples; ++t) smooth(t) = 0.9 * smooth(t - 1) + 0.1 * smooth(t);
+  VectorXd sines_in_noise = sines(samples, {0.03, 0.08, 0.21}) + 1e-4 * white(samples, 8);
+  sysid::ExcitationOrderOptions o;
+  o.max_order = n;
+  for (const VectorXd& u : {smooth, sines_in_noise, white(samples, 9)}) {
+    const sysid::ExcitationOrder pe = sysid::excitation_order(log_of({u}), 0, o);
+    const VectorXd reference = hankel_singular_values_by_svd(u, n);
+    ASSERT_EQ(pe.singular_values.size(), n);
+    for (Eigen::Index k = 0; k < n; ++k)
+      EXPECT_NEAR(pe.singular_values(k), reference(k), 1e-6 + 1e-6 * reference(k)) << "singular value " << k;
+  }
+  EXPECT_EQ(sysid::excitation_order(log_of({sines_in_noise}), 0, o).order, 6);
+  EXPECT_EQ(sysid::excitation_order(log_of({smooth}), 0, o).order, n);  // a smooth decay excites every order
+}
+
+TEST(PersistentExcitation, FewerRowsThanColumnsGiveThatManySingularValues) {
+  sysid::ExcitationOrderOptions o;
+  o.max_order = 10;
+  o.max_samples = 4;  // a 4 x 10 Hankel matrix: rank 4 at most
+  const sysid::ExcitationOrder pe = sysid::excitation_order(log_of({white(100, 4)}), 0, o);
+  EXPECT_EQ(pe.singular_values.size(), 4);
+  EXPECT_EQ(pe.order, 4);
 }
 
 TEST(PersistentExcitation, PreconditionsAreChecked) {
