@@ -34,7 +34,7 @@ ExcitationOrder excitation_order(const IoData& data, Eigen::Index input, const E
   // every experiment) from correlation sums, O(rows n) instead of the O(rows n^2)
   // of a QR. Its eigenvalues are the squared singular values; rounding puts a
   // floor of about sqrt(n eps) ~ 1e-7 (n <= 256) under the relative singular
-  // values, far below the decision threshold `tolerance` (1e-3).
+  // values, far below the decision threshold `tolerance` (1e-3) (see below).
   Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(n, n);
   Eigen::Index at = 0;
   for (const auto& e : data.experiments) {
@@ -53,9 +53,13 @@ ExcitationOrder excitation_order(const IoData& data, Eigen::Index input, const E
   result.singular_values /= result.singular_values(0);
   // k sinusoids give an exact rank 2k plus noise: the order ends at a drop of 40 dB
   // or more to below the tolerance. A smooth decay (continuous spectrum) is exciting.
+  // Below the rounding floor of the Gram route (about 3 sqrt(n eps) relative)
+  // the values are noise, and clamped negative eigenvalues would fake a cliff:
+  // a 100x drop is resolved only from a value 100 times above that floor.
   const Eigen::VectorXd& sv = result.singular_values;
+  const double resolved = 100.0 * 3.0 * std::sqrt(static_cast<double>(n) * std::numeric_limits<double>::epsilon());
   result.order = n;
-  for (Eigen::Index k = 0; k + 1 < sv.size(); ++k)
+  for (Eigen::Index k = 0; k + 1 < sv.size() && sv(k) >= resolved; ++k)
     if (sv(k + 1) < o.tolerance && sv(k + 1) < 1e-2 * sv(k)) {
       result.order = k + 1;
       break;

@@ -20,9 +20,11 @@
 /// sums (core/detail/lagged_sums.hpp) in O(N n) rather than by a QR in O(N n^2):
 /// inside n4sid on the Par2 log this check took a fifth of the time. These are
 /// normal equations, acceptable here because only the decision matters: rounding
-/// leaves a floor of about sqrt(n eps) <= 2e-7 under the relative singular
-/// values, four decades below `tolerance`; a cliff from a value under about 1e-5
-/// of the largest can be missed (the test against a direct SVD is in
+/// leaves a floor of about 3 sqrt(n eps) (1e-7 to 7e-7 for n = 10..256) under
+/// the relative singular values, four decades below `tolerance`. A cliff is
+/// looked for only from values 100 times above that floor (1e-5 to 7e-5): an
+/// input whose last excited direction is weaker than that counts as exciting
+/// there (the test against a direct SVD is in
 /// tests/unit/core_persistent_excitation.cpp).
 ///
 /// What each model needs (Söderström & Stoica, "System Identification", 1989,
