@@ -1,10 +1,10 @@
 // Implementation of pem/prediction_error.hpp (method and references in the header).
 #include <sysid/core/errors.hpp>
 #include <sysid/core/streaming_qr.hpp>
+#include <sysid/core/transfer_function.hpp>
 #include <sysid/pem/arx.hpp>
 #include <sysid/pem/lagged_regression.hpp>
 #include <sysid/pem/prediction_error.hpp>
-#include <sysid/core/transfer_function.hpp>
 #include <sysid/signal/polynomial_filter.hpp>
 #include <sysid/subspace/n4sid.hpp>
 
@@ -428,7 +428,7 @@ LmRun levenberg_marquardt(PolynomialModel& model, const std::vector<ScaledRecord
         // shrinks the damping tenfold: on ill-conditioned problems the damped step
         // is otherwise tiny for dozens of iterations.
         // Consecutive such steps at the first try shrink it faster and faster
-        // (0.1, 0.01, 1e-3, ...): the damping that suits an ill-conditioned
+        // (0.1, 0.01, 1e-3, then 1e-4 each): the damping that suits an ill-conditioned
         // problem can lie ten decades below the start. A step shortened by
         // the stability constraint leaves the damping as it is.
         if (fraction < 1.0) {
@@ -556,8 +556,8 @@ Eigen::VectorXd resized(const Eigen::VectorXd& p, Eigen::Index size) {
   return out;
 }
 
-/// ARMAX start from a subspace model (scaled units): n4sid on the records
-/// (order chosen by its SVC rule, at most na), then the polynomials of its
+/// ARMAX start from a subspace model (scaled units): MOESP-weighted n4sid on
+/// the records (order chosen by its SVC rule, at most min(na, 20)), then the polynomials of its
 /// innovation form x+ = A x + B u + K e, y = C x + D u + e (single output):
 ///   A(q) = det(zI - A),   C(q) = det(zI - A + K C)   (A(q) when K is not available:
 ///   the output-error predictor), and per input, since for one output
