@@ -77,19 +77,8 @@ Eigen::VectorXd reflect_into_unit_circle(const Eigen::VectorXd& monic) {
       changed = true;
     }
   if (!changed) return monic;
-  return detail::monic_from_roots(roots);
+  return poly_from_roots(roots);  // reflection keeps conjugate pairs: the result is real
 }
-
-namespace detail {
-Eigen::VectorXd monic_from_roots(const Eigen::VectorXcd& roots) {
-  // [1, p_1..p_n] of prod (1 - z_k q^-1); real when the roots come in conjugate pairs.
-  Eigen::VectorXcd poly = Eigen::VectorXcd::Zero(roots.size() + 1);
-  poly(0) = 1.0;
-  for (Eigen::Index k = 0; k < roots.size(); ++k)
-    for (Eigen::Index j = k + 1; j >= 1; --j) poly(j) -= roots(k) * poly(j - 1);
-  return poly.real();
-}
-}  // namespace detail
 
 namespace {
 

@@ -150,9 +150,4 @@ Eigen::VectorXcd polynomial_roots(const Eigen::VectorXd& monic);
 /// The same polynomial with every root outside the unit circle reflected to 1/conj(z) (spectral factor).
 Eigen::VectorXd reflect_into_unit_circle(const Eigen::VectorXd& monic);
 
-namespace detail {
-/// [1, p_1..p_n] of prod_k (1 - z_k q^-1); the roots must come in conjugate pairs.
-Eigen::VectorXd monic_from_roots(const Eigen::VectorXcd& roots);
-}  // namespace detail
-
 }  // namespace sysid
