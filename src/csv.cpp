@@ -436,7 +436,12 @@ IoData log_from_table(const CsvTable& table, const LogOptions& options) {
                         "non-uniform time stamps: step " + format_seconds(step) + " s at line " +
                             std::to_string(line_of(r)) + ", expected " + format_seconds(median_step) + " s");
     }
-    ts = (tk[n - 1] - tk[0]) / static_cast<double>(n - 1);
+    // Every step is finite, yet their sum can overflow (steps of 1e308 from
+    // -1e308 to 1e308): then divide before subtracting (exact enough there, and
+    // finite since |tk| / (n - 1) <= DBL_MAX / 2 for n >= 3; n = 2 is one step).
+    const double span = tk[n - 1] - tk[0];
+    const auto intervals = static_cast<double>(n - 1);
+    ts = std::isfinite(span) ? span / intervals : tk[n - 1] / intervals - tk[0] / intervals;
     if (options.ts && std::abs(*options.ts - ts) > options.time_tolerance * *options.ts)
       throw DataError(src, 0, 0,
                       "time column '" + options.time_column + "' gives a sample time of " + format_seconds(ts) +

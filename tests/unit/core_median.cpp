@@ -31,6 +31,15 @@ TEST(Median, DoesNotDependOnOrderAndIgnoresOutliers) {
   EXPECT_DOUBLE_EQ(sysid::median(v), 50.0);
 }
 
+TEST(Median, EvenCountOfHugeValuesDoesNotOverflow) {
+  // 0.5 * (a + b) overflowed to Inf for two values of 1e308 (found by fuzz.csv).
+  const double big = 1e308;
+  EXPECT_EQ(sysid::median({big, big}), big);
+  const double max = std::numeric_limits<double>::max();
+  EXPECT_EQ(sysid::median({max, max, -1.0, max}), max);
+  EXPECT_EQ(sysid::median({-max, -max}), -max);
+}
+
 TEST(Median, EmptySetIsAnError) {
   EXPECT_THROW(sysid::median({}), std::invalid_argument);
 }

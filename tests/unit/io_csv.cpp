@@ -381,6 +381,19 @@ TEST(IoCsv, TimeStepTooLargeForADouble) {
   expect_data_error([&] { sysid::log_from_table(table, o); }, "mem.csv", 3, 1, "too large for a double");
 }
 
+TEST(IoCsv, HugeFiniteStepsWhoseSpanOverflows) {
+  // Each step (about 1e308) is a double, the span -1e308 .. 1e308 is not: the
+  // median step and Ts overflowed to Inf (found by fuzz.csv). The steps are
+  // uniform within 1 %, so the log reads with a finite Ts.
+  const CsvTable table = parse("t,y\n-1e308,2\n307,1\n1e308,2\n");
+  LogOptions o;
+  o.outputs = {"y"};
+  o.time_tolerance = 1e-2;
+  const sysid::IoData d = sysid::log_from_table(table, o);
+  EXPECT_TRUE(std::isfinite(d.Ts));
+  EXPECT_NEAR(d.Ts, 1e308, 1e-12 * 1e308);
+}
+
 TEST(IoCsv, LogPreconditions) {
   const CsvTable table = parse(make_log(10, 0.1));
   LogOptions o;

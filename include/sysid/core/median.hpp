@@ -4,6 +4,7 @@
 /// statistic in the library (window floors, MAD scales, median time steps).
 #include <algorithm>
 #include <cstddef>
+#include <numeric>
 #include <stdexcept>
 #include <vector>
 
@@ -18,8 +19,10 @@ inline double median(std::vector<double> values) {
   const auto mid = values.begin() + static_cast<std::ptrdiff_t>(n / 2);
   std::nth_element(values.begin(), mid, values.end());
   if (n % 2 == 1) return *mid;
-  // The lower middle value is the largest of those before `mid`.
-  return 0.5 * (*mid + *std::max_element(values.begin(), mid));
+  // The lower middle value is the largest of those before `mid`. std::midpoint
+  // rather than 0.5 * (a + b): the sum of two finite values can overflow (two
+  // time steps of 1e308 gave an infinite median step; found by fuzz.csv).
+  return std::midpoint(*std::max_element(values.begin(), mid), *mid);
 }
 
 }  // namespace sysid
