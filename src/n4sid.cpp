@@ -21,6 +21,7 @@
 #include <sysid/validate/fit.hpp>
 
 #include <cmath>
+#include <iomanip>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -171,11 +172,21 @@ inline BdxEstimate estimate_bdx(const Eigen::MatrixXd& A, const Eigen::MatrixXd&
     }
   }
   const Eigen::MatrixXd r = qr.r();
-  const Eigen::MatrixXd r11 = r.topLeftCorner(p, p);
+  // Column equilibration before the rank decision: the regressors' scales can
+  // differ by many decades (C A^t and the B regressors grow like rho(A)^t when
+  // A is unstable: 1e21 over 600 samples at rho = 1.083), and a rank threshold
+  // relative to the largest pivot then discards every other column, B = D = 0.
+  // The column norms of R are those of the regression (Q is orthogonal), and
+  // R S is the R factor of M S, so scaling after the QR is scaling the data.
+  Eigen::VectorXd column_norm = r.topLeftCorner(p, p).colwise().norm().transpose();
+  for (double& c : column_norm)
+    if (!(c > 0.0)) c = 1.0;  // an all-zero regressor (input constant zero) stays zero
+  const Eigen::MatrixXd r11 = r.topLeftCorner(p, p) * column_norm.cwiseInverse().asDiagonal();
   const Eigen::VectorXd d = r11.diagonal().cwiseAbs();
   out.condition = d.minCoeff() > 0 ? d.maxCoeff() / d.minCoeff() : std::numeric_limits<double>::infinity();
   // Rank-revealing solve of the small triangular system (guards against an unexcited direction).
-  const Eigen::VectorXd theta = r11.completeOrthogonalDecomposition().solve(r.topRightCorner(p, 1));
+  const Eigen::VectorXd theta =
+      r11.completeOrthogonalDecomposition().solve(r.topRightCorner(p, 1)).cwiseQuotient(column_norm);
   out.B = Eigen::Map<const Eigen::MatrixXd>(theta.data(), n, m);
   out.D = Eigen::Map<const Eigen::MatrixXd>(theta.data() + n * m, l, m);
   for (Eigen::Index e = 0; e < experiments; ++e) out.x0.push_back(theta.segment(n * m + l * m + e * n, n));
@@ -216,11 +227,40 @@ struct SubspaceCore {
   Eigen::VectorXd singular_values, canonical_correlations;
   int order = 0, horizon = 0;
   std::string order_rule;
+  std::string order_warning;  ///< set when the order rule had to fall back (select_order_when_svc_finds_none)
   HankelRoute route_used = HankelRoute::qr;
   double gram_condition_estimate = 0, observability_condition = 0, past_future_min_sine = 1;
   int oblique_dropped_directions = 0;
   std::vector<std::string> warnings;
 };
+
+/// SVC chose order 0. If the canonical correlations are significant (the past
+/// predicts the future), SVC's penalty is what removed every order, not the
+/// data: the largest singular-value gap chooses instead, with a warning. If
+/// they are not, there are no dynamics to identify (NumericalError).
+inline void select_order_when_svc_finds_none(SubspaceCore& res, int top, Eigen::Index columns, Eigen::Index test_samples,
+                                             Eigen::Index future_rows, Eigen::Index past_rows, Eigen::Index l, Eigen::Index m) {
+  const CanonicalCorrelationTest test = bartlett_zero_correlation_test(
+      res.canonical_correlations, std::max<Eigen::Index>(test_samples, 1), future_rows, std::max<Eigen::Index>(past_rows, 1));
+  std::ostringstream why;
+  why << std::setprecision(4) << "Bauer's SVC chose order 0 (its penalty " << std::log(static_cast<double>(columns)) / static_cast<double>(columns) * static_cast<double>(2 * l + m)
+      << " per order, from " << columns << " Hankel columns, " << l << " output(s) and " << m
+      << " input(s), exceeds every drop of the squared canonical correlations " << res.canonical_correlations(0);
+  if (res.canonical_correlations.size() > 1) why << ", " << res.canonical_correlations(1);
+  why << ", ...)";
+  if (!test.valid || test.p_value > 0.01) {
+    why << " and ";
+    if (test.valid) why << "Bartlett's test finds no significant correlation between past and future (p = " << test.p_value << ")";
+    else why << "too few samples for Bartlett's test of past-future correlation";
+    throw NumericalError("n4sid: no dynamics to identify: " + why.str() + "; give an order with --order N");
+  }
+  const OrderChoice gap = choose_order_by_gap(res.singular_values, top);
+  why << ", yet the correlations are significant (Bartlett's test p = " << test.p_value << ")";
+  res.order = gap.order;
+  res.order_rule = gap.rule + "; Bauer's SVC chose 0, see the warning";
+  res.order_warning = "n4sid: " + why.str() + ": the order comes from the " + gap.rule +
+                      "; compare orders on held-out data with --order LO:HI";
+}
 
 inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& options) {
   const Eigen::Index m = data.inputs(), l = data.outputs();
@@ -291,7 +331,11 @@ inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& option
                                    : choose_order_by_gap(res.singular_values, top);
     res.order = choice.order;
     res.order_rule = choice.rule;
-    if (res.order < 1) throw NumericalError("n4sid: the singular values show no dynamics (order 0 chosen)");
+    // The correlations are those left after projecting out the future inputs:
+    // that regression uses uf.rows() of the columns' degrees of freedom.
+    if (res.order < 1)
+      select_order_when_svc_finds_none(res, top, hc.columns, hc.columns - uf.rows(), yf.rows(),
+                                       wp.rows() - oi.dropped_directions, l, m);
   }
   const Eigen::Index n = res.order;
   if (n >= res.singular_values.size() || res.singular_values(n - 1) <= tol * res.singular_values(0))
@@ -443,6 +487,7 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
       fixed.order_rule = c.order_rule + " at horizon " + std::to_string(c.horizon);
       fixed.singular_values = c.singular_values;
       fixed.canonical_correlations = c.canonical_correlations;
+      fixed.order_warning = c.order_warning;
       c = std::move(fixed);
     }
     return c;
@@ -469,6 +514,7 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
   res.past_future_min_sine = core.past_future_min_sine;
   res.oblique_dropped_directions = core.oblique_dropped_directions;
   res.warnings.insert(res.warnings.end(), core.warnings.begin(), core.warnings.end());
+  if (!core.order_warning.empty()) res.warnings.push_back(core.order_warning);
   for (auto& w : identification_data_warnings(data, 2 * res.order,
                                               "a state-space model of order " + std::to_string(res.order), "n4sid"))
     res.warnings.push_back(std::move(w));
@@ -502,9 +548,12 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
     if (bdx.samples_used < data.total_samples())
       res.warnings.push_back("n4sid: B, D and x0 were fitted on the first " + std::to_string(options.bdx_max_samples) +
                              " samples of each experiment (bdx_max_samples)");
-    if (bdx.condition > 1e10)
-      res.warnings.push_back("n4sid: the B/D/x0 regression is ill-conditioned (" + std::to_string(bdx.condition) +
-                             "); some input directions are poorly excited");
+    if (bdx.condition > 1e10) {
+      std::ostringstream w;
+      w << "n4sid: the B/D/x0 regression is ill-conditioned (condition " << std::setprecision(3) << bdx.condition
+        << " after column scaling); some input directions are poorly excited";
+      res.warnings.push_back(w.str());
+    }
   }
 
   // Fit on the estimation data (scaled units: fit % is scale-invariant). The

@@ -79,6 +79,38 @@ TEST_P(N4sidWeightings, AutomaticOrderFindsTheTrueOrder) {
   }
 }
 
+TEST(N4sid, AutomaticOrderWhenSvcPenaltyExceedsEveryDrop) {
+  // Six outputs, three inputs, 400 samples: SVC's penalty is log(N)/N * 15 =
+  // 0.2 per order, so any order beyond 4 costs more than sigma_1^2 <= 1 and the
+  // rule returns 0 for a 6th-order plant (the DaISy glass furnace's situation).
+  // The canonical correlations are significant, so the gap rule chooses, with a warning.
+  const StateSpace truth = test::random_modal_system(3, 3, 6, 77);
+  const IoData data = simulate_noisy(truth, 400, 5, 0.01);
+  N4sidOptions opt;
+  opt.max_order = 12;
+  const N4sidResult r = n4sid(data, opt);
+  EXPECT_EQ(r.order, 6) << r.order_rule;
+  EXPECT_NE(r.order_rule.find("singular-value gap"), std::string::npos) << r.order_rule;
+  bool warned = false;
+  for (const auto& w : r.warnings) warned = warned || w.find("Bauer's SVC chose order 0") != std::string::npos;
+  EXPECT_TRUE(warned);
+}
+
+TEST(N4sid, AutomaticOrderOnOutputsIndependentOfEverythingIsAnError) {
+  // White outputs unrelated to the white inputs: no canonical correlation is
+  // significant, so there are no dynamics to identify (NumericalError), rather
+  // than a model of noise from the gap rule.
+  const Eigen::MatrixXd u = test::white_noise(400, 3, 21), y = test::white_noise(400, 6, 22);
+  N4sidOptions opt;
+  opt.max_order = 12;
+  try {
+    (void)n4sid(IoData(u, y, 1.0), opt);
+    FAIL() << "expected NumericalError";
+  } catch (const NumericalError& e) {
+    EXPECT_NE(std::string(e.what()).find("no dynamics to identify"), std::string::npos) << e.what();
+  }
+}
+
 TEST_P(N4sidWeightings, InputThatLeavesPartOfTheBandEmpty) {
   // A multisine up to 0.3 fs leaves 0.3..0.5 fs empty: past and future inputs
   // are then nearly collinear (too wide a band for the decimated grid). The
