@@ -2,6 +2,7 @@
 
 #include <sysid/core/discretize.hpp>
 #include <sysid/core/errors.hpp>
+#include <sysid/core/format_number.hpp>
 #include <sysid/io/atomic_file.hpp>
 
 #include <cmath>
@@ -182,9 +183,7 @@ CLI::Validator range_validator() {
 
 std::string fmt(double value, int digits) {
   if (std::isnan(value)) return "n/a";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*g", digits, value);
-  return buf;
+  return format_number(value, digits);
 }
 
 std::string join(const std::vector<std::string>& items, const std::string& separator) {

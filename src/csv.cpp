@@ -13,6 +13,7 @@
 #include <unordered_set>
 
 #include "sysid/core/errors.hpp"
+#include "sysid/core/format_number.hpp"
 #include "sysid/core/median.hpp"
 #include "sysid/io/atomic_file.hpp"
 
@@ -264,12 +265,7 @@ class CsvParser {
   Eigen::Index m_capacity = 0;  ///< allocated rows of the result (column stride)
 };
 
-std::string format_seconds(double x) {
-  std::ostringstream s;
-  s.precision(6);
-  s << x;
-  return s.str();
-}
+std::string format_seconds(double x) { return format_number(x, 6); }
 
 std::string join(const std::vector<std::string>& names) {
   std::string s;

@@ -1,6 +1,8 @@
 // Pre-flight data check (see include/sysid/validate/data_check.hpp).
 #include "sysid/validate/data_check.hpp"
 
+#include <sysid/core/format_number.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
@@ -19,12 +21,6 @@
 namespace sysid {
 
 namespace {
-
-std::string number(double v, int digits = 3) {
-  std::ostringstream s;
-  s << std::setprecision(digits) << v;
-  return s.str();
-}
 
 /// Mean, std, offset, trend and clipping of one channel.
 ChannelCheck channel_statistics(const std::string& name, const Eigen::VectorXd& x) {
@@ -110,7 +106,7 @@ DataCheckResult check_data(const IoData& data, const Eigen::VectorXd& time, cons
     c.snr_db = std::isfinite(lambda) && lambda > 0.0 && var > lambda ? 10.0 * std::log10((var - lambda) / lambda)
                                                                      : std::numeric_limits<double>::quiet_NaN();
     if (std::isfinite(c.snr_db) && c.snr_db < 10.0)
-      serious.push_back("output " + c.name + " has a signal-to-noise ratio of about " + number(c.snr_db, 2) +
+      serious.push_back("output " + c.name + " has a signal-to-noise ratio of about " + format_number(c.snr_db, 2) +
                         " dB: parameter variances will be large; excite harder or record longer");
     if (c.std == 0.0) serious.push_back("output " + c.name + " is constant: nothing to identify");
     r.outputs.push_back(std::move(c));
@@ -121,14 +117,14 @@ DataCheckResult check_data(const IoData& data, const Eigen::VectorXd& time, cons
     for (const ChannelCheck& c : *channels) {
       const std::string what = std::string(is_input ? "input " : "output ") + c.name;
       if (c.clipped_share >= o.clipping_share && c.clipped_share * static_cast<double>(N) >= 5.0)
-        serious.push_back(what + " sits at its extreme value in " + number(100.0 * c.clipped_share, 2) +
+        serious.push_back(what + " sits at its extreme value in " + format_number(100.0 * c.clipped_share, 2) +
                           " % of the samples: likely clipped (sensor or amplifier range); a linear model will be biased — "
                           "reduce the amplitude or drop the clipped stretches");
       if (c.std > 0.0 && c.offset_ratio > o.offset_ratio)
-        advisory.push_back(what + " has an offset of " + number(c.mean) + " (" + number(c.offset_ratio, 2) +
+        advisory.push_back(what + " has an offset of " + format_number(c.mean, 3) + " (" + format_number(c.offset_ratio, 2) +
                            " standard deviations): remove it (the verbs remove means) or model it");
       if (c.trend_ratio > o.trend_ratio)
-        advisory.push_back(what + " drifts by " + number(c.trend_ratio, 2) +
+        advisory.push_back(what + " drifts by " + format_number(c.trend_ratio, 2) +
                            " standard deviations over the record: detrend it (sysid filter --detrend linear), "
                            "or the drift is fitted as slow dynamics");
     }
@@ -166,8 +162,8 @@ DataCheckResult check_data(const IoData& data, const Eigen::VectorXd& time, cons
       f.likely = f.largest_correlation > f.bound;
       if (f.likely)
         serious.push_back("input " + data.input_name(j) + " depends on past values of output " + data.output_name(i) +
-                          " (prewhitened correlation " + number(f.largest_correlation, 2) + " at lag " +
-                          std::to_string(f.at_lag) + ", bound " + number(f.bound, 2) +
+                          " (prewhitened correlation " + format_number(f.largest_correlation, 2) + " at lag " +
+                          std::to_string(f.at_lag) + ", bound " + format_number(f.bound, 2) +
                           "): likely closed-loop data; output-error and subspace methods are then biased — use a "
                           "prediction-error model with a noise model (ARX, ARMAX) or an external reference");
       r.feedback.push_back(f);
@@ -193,7 +189,7 @@ DataCheckResult check_data(const IoData& data, const Eigen::VectorXd& time, cons
       serious.push_back("the time column has " + std::to_string(s.gaps) +
                         " gap(s) longer than 1.5 sample times: samples were lost; identify on the stretches between gaps");
     else if (s.max_jitter > 0.01)
-      advisory.push_back("the sample time varies by up to " + number(100.0 * s.max_jitter, 2) +
+      advisory.push_back("the sample time varies by up to " + format_number(100.0 * s.max_jitter, 2) +
                          " %: timing jitter acts like noise at high frequencies");
   }
 
@@ -207,24 +203,24 @@ std::string DataCheckResult::report() const {
   s << samples << " samples\n";
   s << "inputs:\n";
   for (const auto& c : inputs)
-    s << "  " << c.name << ": mean " << number(c.mean) << ", std " << number(c.std) << ", excitation order "
-      << c.excitation_order << ", trend " << number(c.trend_ratio, 2) << " std, at extremes "
-      << number(100.0 * c.clipped_share, 2) << " %\n";
+    s << "  " << c.name << ": mean " << format_number(c.mean, 3) << ", std " << format_number(c.std, 3) << ", excitation order "
+      << c.excitation_order << ", trend " << format_number(c.trend_ratio, 2) << " std, at extremes "
+      << format_number(100.0 * c.clipped_share, 2) << " %\n";
   s << "outputs:\n";
   for (const auto& c : outputs)
-    s << "  " << c.name << ": mean " << number(c.mean) << ", std " << number(c.std) << ", SNR "
-      << (std::isfinite(c.snr_db) ? number(c.snr_db, 3) + " dB (upper estimate)" : std::string("n/a")) << ", trend "
-      << number(c.trend_ratio, 2) << " std, at extremes " << number(100.0 * c.clipped_share, 2) << " %\n";
+    s << "  " << c.name << ": mean " << format_number(c.mean, 3) << ", std " << format_number(c.std, 3) << ", SNR "
+      << (std::isfinite(c.snr_db) ? format_number(c.snr_db, 3) + " dB (upper estimate)" : std::string("n/a")) << ", trend "
+      << format_number(c.trend_ratio, 2) << " std, at extremes " << format_number(100.0 * c.clipped_share, 2) << " %\n";
   if (!feedback.empty()) {
     s << "feedback test (prewhitened input vs past output, lags 1..):\n";
     for (const auto& f : feedback)
       s << "  " << (f.input < static_cast<Eigen::Index>(inputs.size()) ? inputs[static_cast<std::size_t>(f.input)].name : "?")
         << " <- past " << (f.output < static_cast<Eigen::Index>(outputs.size()) ? outputs[static_cast<std::size_t>(f.output)].name : "?")
-        << ": largest |r| " << number(f.largest_correlation, 2) << " at lag " << f.at_lag << " (bound " << number(f.bound, 2)
+        << ": largest |r| " << format_number(f.largest_correlation, 2) << " at lag " << f.at_lag << " (bound " << format_number(f.bound, 2)
         << ")" << (f.likely ? " LIKELY FEEDBACK" : "") << "\n";
   }
   if (sampling.checked)
-    s << "sampling: median step " << number(sampling.median_step, 6) << " s, jitter " << number(100.0 * sampling.max_jitter, 2)
+    s << "sampling: median step " << format_number(sampling.median_step, 6) << " s, jitter " << format_number(100.0 * sampling.max_jitter, 2)
       << " %, gaps " << sampling.gaps << "\n";
   if (findings.empty())
     s << "findings: none — the log looks fit for identification\n";

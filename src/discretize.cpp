@@ -2,6 +2,7 @@
 // Compiled once into libsysid: Eigen's matrix exponential and logarithm
 // (MatrixFunctions, Schur-Parlett) are heavy to instantiate.
 #include <sysid/core/discretize.hpp>
+#include <sysid/core/format_number.hpp>
 
 #include <Eigen/Dense>
 #include <unsupported/Eigen/MatrixFunctions>
@@ -71,8 +72,8 @@ StateSpace d2c_zoh(const StateSpace& discrete) {
     const bool at_zero = std::abs(p[i]) <= static_cast<double>(n) * eps * scale;
     const bool negative_real = p[i].real() < 0.0 && std::abs(p[i].imag()) <= std::sqrt(eps) * std::abs(p[i]);
     if (at_zero || negative_real)
-      throw NumericalError("d2c_zoh: discrete pole " + std::to_string(p[i].real()) + (p[i].imag() >= 0 ? "+" : "") +
-                           std::to_string(p[i].imag()) +
+      throw NumericalError("d2c_zoh: discrete pole " + format_number(p[i].real()) + (p[i].imag() >= 0 ? "+" : "") +
+                           format_number(p[i].imag()) +
                            "j is on the negative real axis or at 0: no continuous-time ZOH equivalent");
   }
   Eigen::MatrixXd M = Eigen::MatrixXd::Identity(n + m, n + m);

@@ -2,6 +2,7 @@
 // header). Compiled once into libsysid: the Schur reordering, Sylvester solve,
 // QR, symmetric eigensolver and SVD are heavy to instantiate.
 #include <sysid/core/detail/poles_zeros.hpp>
+#include <sysid/core/format_number.hpp>
 #include <sysid/reduce/detail/gramians.hpp>
 #include <sysid/reduce/detail/hankel_singular_values.hpp>
 #include <sysid/reduce/hankel_singular_values.hpp>
@@ -164,7 +165,7 @@ StabilitySplit stable_unstable_split(const StateSpace& sys, double tol, ComplexS
   const double a21 = At.bottomLeftCorner(n - k, k).norm();
   if (a21 > 1e3 * static_cast<double>(n) * std::numeric_limits<double>::epsilon() * sys.A.norm())
     throw NumericalError("stable_unstable_split: the stable subspace is not invariant (||A21|| = " +
-                         std::to_string(a21) + "): poles too close to the stability boundary to separate");
+                         format_number(a21) + "): poles too close to the stability boundary to separate");
   const Eigen::MatrixXd Bt = Q.transpose() * sys.B, Ct = sys.C * Q;
   // Sylvester A11 X - X A22 + A12 = 0 on the triangular factors:
   // A11 = W1 T11 W1^H, A22 = W2 T22 W2^H with W1 = Qs^T U1, W2 = Qu^T U2 (unitary).

@@ -1,6 +1,7 @@
 // Detectors of the physics hypotheses; the method is documented in
 // include/sysid/diagnose/hypotheses.hpp.
 #include "sysid/diagnose/hypotheses.hpp"
+#include "sysid/core/format_number.hpp"
 #include "sysid/core/math_constants.hpp"
 
 #include <algorithm>
@@ -451,8 +452,8 @@ void add_mode_shift_candidates(const Context& c, long j, long i, std::vector<Can
     candidate.free = {{"freq_hz", 0.9 * mode.freq_hz, std::min(1.1 * mode.freq_hz, f_max), true},
                       {"damping", 0.2 * mode.damping, std::min(5.0 * mode.damping, 0.6), true}};
     candidate.detector_score = std::max(0.0, best_score);
-    candidate.evidence = "the simulation's mode at " + std::to_string(mode.freq_hz) + " Hz moved to " +
-                         std::to_string(best_f) + " Hz explains " + percent(candidate.detector_score);
+    candidate.evidence = "the simulation's mode at " + format_number(mode.freq_hz) + " Hz moved to " +
+                         format_number(best_f) + " Hz explains " + percent(candidate.detector_score);
     out.push_back(candidate);
   }
 }

@@ -1,6 +1,7 @@
 // Implementation of realization/markov_parameters.hpp (the deconvolution method is
 // described in the header).
 #include <sysid/core/errors.hpp>
+#include <sysid/core/format_number.hpp>
 #include <sysid/core/streaming_qr.hpp>
 #include <sysid/realization/markov_parameters.hpp>
 
@@ -140,9 +141,9 @@ ImpulseDeconvolutionResult impulse_response_from_taps(const IoData& taps, const 
   }
   if (L >= 8 && hmax > 0.0 && tail > 0.05 * hmax)
     res.warnings.push_back("impulse response has not decayed within " + std::to_string(L) + " samples (tail/peak = " +
-                           std::to_string(tail / hmax) + "): increase length");
+                           format_number(tail / hmax) + "): increase length");
   if (res.condition > 1e8)
-    res.warnings.push_back("ill-conditioned deconvolution (cond = " + std::to_string(res.condition) +
+    res.warnings.push_back("ill-conditioned deconvolution (cond = " + format_number(res.condition) +
                            "): the force has little content in part of the band; the regularisation decides there");
   return res;
 }

@@ -2,6 +2,7 @@
 // include/sysid/diagnose/mismatch_location.hpp (method and references there).
 #include <sysid/diagnose/mismatch_location.hpp>
 
+#include <sysid/core/format_number.hpp>
 #include <sysid/core/median.hpp>
 #include <sysid/spectral/confidence.hpp>
 #include <sysid/spectral/frf.hpp>
@@ -150,12 +151,6 @@ Eigen::Index next_pow2(Eigen::Index n) {
   Eigen::Index p = 1;
   while (p < n) p *= 2;
   return p;
-}
-
-std::string fmt(double v, int digits = 4) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
-  return buf;
 }
 
 /// Critical value of z^2 for a two-sided t-test at level alpha with nu degrees of
@@ -464,7 +459,7 @@ void spectral_tests(const Common& c, const FrfResult& fr, Eigen::Index i, Channe
     if (!residual_zero)
       warnings.push_back(ch.output + ": model-error FRF not tested (" +
                          (analysed.empty() ? std::string("no excited bins in the band")
-                                           : "n_d = " + fmt(nd) + " averages leave fewer than one for " +
+                                           : "n_d = " + format_number(nd) + " averages leave fewer than one for " +
                                                  std::to_string(m) + " inputs: lower nfft") +
                          ")");
     ch.coherence_threshold = 1.0;
@@ -1021,38 +1016,38 @@ MismatchLocation locate_mismatch_impl(const Eigen::MatrixXd& u, const Eigen::Mat
 
 std::string MismatchLocation::brief_report() const {
   std::ostringstream s;
-  s << (any_mismatch ? "mismatch found" : "no significant mismatch") << " (family level " << detail::fmt(family_level, 3)
-    << ", nfft " << nfft << ", " << segments << " averages, nu = " << detail::fmt(dof, 3) << ")";
+  s << (any_mismatch ? "mismatch found" : "no significant mismatch") << " (family level " << format_number(family_level, 3)
+    << ", nfft " << nfft << ", " << segments << " averages, nu = " << format_number(dof, 3) << ")";
   for (const auto& ch : outputs) {
-    s << "\n" << ch.output << ": residual RMS " << detail::fmt(ch.residual_rms);
+    s << "\n" << ch.output << ": residual RMS " << format_number(ch.residual_rms);
     for (const auto& b : ch.bands)
-      s << "\n  model error " << detail::fmt(b.lo_hz) << ".." << detail::fmt(b.hi_hz) << " Hz, peak " << detail::fmt(b.peak_hz)
-        << " Hz |E| = " << detail::fmt(b.peak_gain) << " (input " << b.input_name << ", coherence "
-        << detail::fmt(b.peak_coherence, 3) << ")";
+      s << "\n  model error " << format_number(b.lo_hz) << ".." << format_number(b.hi_hz) << " Hz, peak " << format_number(b.peak_hz)
+        << " Hz |E| = " << format_number(b.peak_gain) << " (input " << b.input_name << ", coherence "
+        << format_number(b.peak_coherence, 3) << ")";
     for (const auto& p : ch.peaks)
-      s << "\n  residual peak " << detail::fmt(p.freq_hz) << " Hz, amplitude " << detail::fmt(p.amplitude) << ", "
-        << detail::fmt(p.prominence_db, 3) << " dB above the floor";
+      s << "\n  residual peak " << format_number(p.freq_hz) << " Hz, amplitude " << format_number(p.amplitude) << ", "
+        << format_number(p.prominence_db, 3) << " dB above the floor";
     for (const auto& w : ch.windows)
       if (w.flagged)
-        s << "\n  energy " << detail::fmt(w.energy_ratio, 3) << " x floor in " << detail::fmt(w.t0_s) << ".."
-          << detail::fmt(w.t1_s) << " s";
+        s << "\n  energy " << format_number(w.energy_ratio, 3) << " x floor in " << format_number(w.t0_s) << ".."
+          << format_number(w.t1_s) << " s";
     if (ch.amplitude.flagged)
-      s << "\n  amplitude-dependent gain: " << detail::fmt(ch.amplitude.gain_low) << " (low) vs "
-        << detail::fmt(ch.amplitude.gain_high) << " (high), z = " << detail::fmt(ch.amplitude.z, 3);
+      s << "\n  amplitude-dependent gain: " << format_number(ch.amplitude.gain_low) << " (low) vs "
+        << format_number(ch.amplitude.gain_high) << " (high), z = " << format_number(ch.amplitude.z, 3);
     if (ch.reversal.flagged)
-      s << "\n  reversal-dependent: energy ratio " << detail::fmt(ch.reversal.energy_ratio, 3) << " (z = "
-        << detail::fmt(ch.reversal.energy_z, 3) << "), sign correlation " << detail::fmt(ch.reversal.sign_correlation, 3)
-        << " (z = " << detail::fmt(ch.reversal.sign_z, 3) << ")";
+      s << "\n  reversal-dependent: energy ratio " << format_number(ch.reversal.energy_ratio, 3) << " (z = "
+        << format_number(ch.reversal.energy_z, 3) << "), sign correlation " << format_number(ch.reversal.sign_correlation, 3)
+        << " (z = " << format_number(ch.reversal.sign_z, 3) << ")";
     if (ch.position.flagged)
-      s << "\n  position-dependent mean: F = " << detail::fmt(ch.position.f_statistic, 3) << ", p = "
-        << detail::fmt(ch.position.p_value, 3);
+      s << "\n  position-dependent mean: F = " << format_number(ch.position.f_statistic, 3) << ", p = "
+        << format_number(ch.position.p_value, 3);
     if (ch.asymmetry.flagged)
       s << "\n  asymmetric (one-sided) dependence on the input: partial coherence with even functions of it "
-        << detail::fmt(ch.asymmetry.peak_partial_coherence, 3) << " at " << detail::fmt(ch.asymmetry.peak_hz) << " Hz (threshold "
-        << detail::fmt(ch.asymmetry.threshold, 3) << ")";
+        << format_number(ch.asymmetry.peak_partial_coherence, 3) << " at " << format_number(ch.asymmetry.peak_hz) << " Hz (threshold "
+        << format_number(ch.asymmetry.threshold, 3) << ")";
     if (ch.offset.flagged)
-      s << "\n  offset " << detail::fmt(ch.offset.offset) << " +- " << detail::fmt(ch.offset.offset_se) << ", drift "
-        << detail::fmt(ch.offset.slope_per_s) << " +- " << detail::fmt(ch.offset.slope_se) << " per s";
+      s << "\n  offset " << format_number(ch.offset.offset) << " +- " << format_number(ch.offset.offset_se) << ", drift "
+        << format_number(ch.offset.slope_per_s) << " +- " << format_number(ch.offset.slope_se) << " per s";
   }
   for (const auto& w : warnings) s << "\nwarning: " << w;
   return s.str();

@@ -14,6 +14,7 @@
 #include <stdexcept>
 
 #include "sysid/core/errors.hpp"
+#include "sysid/core/format_number.hpp"
 #include "sysid/fem/detail/shifted_stiffness.hpp"
 
 namespace sysid::fem {
@@ -36,7 +37,7 @@ class CholmodShiftInvert {
   /// then costs nothing.
   void set_shift(double sigma) {
     if (!m_factor.try_shift(sigma))
-      throw NumericalError("modal_analysis: K - sigma M is not positive definite at sigma = " + std::to_string(sigma));
+      throw NumericalError("modal_analysis: K - sigma M is not positive definite at sigma = " + format_number(sigma));
   }
   void perform_op(const double* x_in, double* y_out) const { m_factor.solve(x_in, y_out); }
 
@@ -161,11 +162,11 @@ ModalAnalysisResult modal_analysis(const SecondOrderModel& model, const ModalAna
     const double off = (r.modal_damping - Eigen::MatrixXd(r.modal_damping.diagonal().asDiagonal())).norm();
     if (diagonal > 0.0 && off > 0.05 * diagonal)
       r.warnings.push_back("the damping matrix couples the retained modes (off-diagonal part " +
-                           std::to_string(off / diagonal) +
+                           format_number(off / diagonal) +
                            " of the diagonal): damping_ratios are only the diagonal; reduced models keep the coupling");
   }
   if (r.max_relative_residual > 1e-9)
-    r.warnings.push_back("largest eigen backward error " + std::to_string(r.max_relative_residual) +
+    r.warnings.push_back("largest eigen backward error " + format_number(r.max_relative_residual) +
                          " > 1e-9: the modes are inaccurate (tighten tolerance or enlarge basis_size)");
   return r;
 }

@@ -9,6 +9,7 @@
 
 #include "sysid/core/discretize.hpp"
 #include "sysid/core/errors.hpp"
+#include "sysid/core/format_number.hpp"
 
 namespace sysid::fem {
 
@@ -89,8 +90,8 @@ ModalModelResult modal_model(const SecondOrderModel& model, const ModalAnalysisR
     result.model.output_names = continuous.output_names;
     const double f_max = std::sqrt(omega2.maxCoeff()) / (2.0 * std::numbers::pi);
     if (f_max > 0.5 / options.Ts)
-      result.warnings.push_back("the highest retained mode (" + std::to_string(f_max) +
-                                " Hz) lies above the Nyquist frequency of Ts (" + std::to_string(0.5 / options.Ts) +
+      result.warnings.push_back("the highest retained mode (" + format_number(f_max) +
+                                " Hz) lies above the Nyquist frequency of Ts (" + format_number(0.5 / options.Ts) +
                                 " Hz): it aliases in the sampled model");
   }
   result.warnings.insert(result.warnings.begin(), modes.warnings.begin(), modes.warnings.end());

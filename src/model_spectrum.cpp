@@ -1,3 +1,4 @@
+#include <sysid/core/format_number.hpp>
 #include <sysid/core/frequency_response.hpp>
 #include <sysid/core/median.hpp>
 #include <sysid/core/poles_zeros.hpp>
@@ -57,7 +58,7 @@ ModelSpectrum model_output_spectrum(const StateSpace& model, const Eigen::Matrix
   if (n > 0) {
     const double radius = poles(model).cwiseAbs().maxCoeff();
     if (!(radius < 1.0))
-      out.warnings.push_back("the model is unstable (spectral radius " + std::to_string(radius) +
+      out.warnings.push_back("the model is unstable (spectral radius " + format_number(radius) +
                              "): it has no stationary output, so its curve is not a spectrum");
   }
   out.output_psd = Eigen::MatrixXd::Zero(nf, l);

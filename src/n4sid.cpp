@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 #include <sysid/core/discrete_riccati.hpp>
 #include <sysid/core/errors.hpp>
+#include <sysid/core/format_number.hpp>
 #include <sysid/core/frequency_response.hpp>
 #include <sysid/core/interconnect.hpp>
 #include <sysid/core/io_data.hpp>
@@ -497,7 +498,7 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
     // inputs and outputs alike (their relation is unchanged), then every r-th sample.
     core = identify(decimate(data, res.decimation));
     core.A = detail::principal_root(core.A, res.decimation);
-    res.warnings.push_back("n4sid: the inputs excite only 0.." + std::to_string(band_hi) + " Hz of " + std::to_string(nyquist) +
+    res.warnings.push_back("n4sid: the inputs excite only 0.." + format_number(band_hi) + " Hz of " + format_number(nyquist) +
                            " Hz: identified on a grid decimated by " + std::to_string(res.decimation) +
                            " (A mapped back by its principal root, B, D, x0 fitted at the original rate)");
   } else {
@@ -548,12 +549,9 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
     if (bdx.samples_used < data.total_samples())
       res.warnings.push_back("n4sid: B, D and x0 were fitted on the first " + std::to_string(options.bdx_max_samples) +
                              " samples of each experiment (bdx_max_samples)");
-    if (bdx.condition > 1e10) {
-      std::ostringstream w;
-      w << "n4sid: the B/D/x0 regression is ill-conditioned (condition " << std::setprecision(3) << bdx.condition
-        << " after column scaling); some input directions are poorly excited";
-      res.warnings.push_back(w.str());
-    }
+    if (bdx.condition > 1e10)
+      res.warnings.push_back("n4sid: the B/D/x0 regression is ill-conditioned (condition " + format_number(bdx.condition, 3) +
+                             " after column scaling); some input directions are poorly excited");
   }
 
   // Fit on the estimation data (scaled units: fit % is scale-invariant). The

@@ -1,6 +1,7 @@
 // Implementation of realization/okid.hpp (method and references in the header).
 // Compiled once into libsysid: the streaming QR, SVD and complete orthogonal
 // decomposition are heavy to instantiate.
+#include <sysid/core/format_number.hpp>
 #include <sysid/core/identification_warnings.hpp>
 #include <sysid/core/streaming_qr.hpp>
 #include <sysid/realization/okid.hpp>
@@ -117,11 +118,11 @@ OkidResult okid(const IoData& data, const OkidOptions& options) {
                            "): noise-free data with p l above the system order, or an input that is not persistently exciting of "
                            "order " + std::to_string(p) + "; a minimum-norm solution was used");
   else if (res.condition > 1e10)
-    res.warnings.push_back("ill-conditioned regression (cond = " + std::to_string(res.condition) +
+    res.warnings.push_back("ill-conditioned regression (cond = " + format_number(res.condition) +
                            "): the input barely excites some directions");
   if (p >= 4 && ybar_max > 0.0 && res.observer_markov.back().norm() > 0.1 * ybar_max)
     res.warnings.push_back("observer Markov parameters have not decayed within p = " + std::to_string(p) +
-                           " (last/peak = " + std::to_string(res.observer_markov.back().norm() / ybar_max) +
+                           " (last/peak = " + format_number(res.observer_markov.back().norm() / ybar_max) +
                            "): increase observer_order");
   if (rows_total < 5 * q)
     res.warnings.push_back("only " + std::to_string(rows_total) + " equations for " + std::to_string(q) +

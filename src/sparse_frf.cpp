@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "sysid/core/errors.hpp"
+#include "sysid/core/format_number.hpp"
 #include "sysid/fem/detail/krylov_sweep.hpp"
 
 namespace sysid::fem {
@@ -231,7 +232,7 @@ SparseFrfResult sparse_frf(const SecondOrderModel& model, const Eigen::VectorXd&
 
   // Modal damping ratio as structural damping: K (1 + j eta), eta = 2 zeta (header).
   if (model.structural_loss_factor() > 0.0)
-    r.warnings.push_back("modal damping ratio " + std::to_string(model.damping.ratio) +
+    r.warnings.push_back("modal damping ratio " + format_number(model.damping.ratio) +
                          " applied as structural damping K (1 + 2j zeta) in the frequency-domain solve: exact at each resonance, "
                          "not viscous away from it");
 

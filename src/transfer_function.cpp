@@ -1,5 +1,6 @@
 // Implementation of core/transfer_function.hpp (method and references in the header).
 #include <sysid/core/detail/poles_zeros.hpp>
+#include <sysid/core/format_number.hpp>
 #include <sysid/core/frequency_response.hpp>
 #include <sysid/core/poles_zeros.hpp>
 #include <sysid/core/transfer_function.hpp>
@@ -73,14 +74,6 @@ struct PolyFactor {
   std::complex<double> root;  ///< representative root (Im >= 0), for ordering and clustering
   int power = 1;
 };
-
-std::string format_number(double v, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
-  std::string s = buf;
-  if (s == "-0") s = "0";
-  return s;
-}
 
 /// Groups roots into real and quadratic factors. A conjugate pair whose imaginary
 /// part does not show at `digits` significant digits in b = |p|^2 becomes a

@@ -20,6 +20,7 @@
 /// with u(t). tau > 0: the input leads the residual (dynamics from u the model
 /// missed); tau < 0: the residual leads the input (output feedback into u).
 #include <sysid/core/errors.hpp>
+#include <sysid/core/format_number.hpp>
 #include <sysid/core/io_data.hpp>
 #include <sysid/core/state_space.hpp>
 #include <sysid/spectral/confidence.hpp>
@@ -314,12 +315,6 @@ inline std::string percent(double confidence) {
   return buf;
 }
 
-inline std::string short_number(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.2g", v);
-  return buf;
-}
-
 }  // namespace detail
 
 /// Purpose: residual analysis of a model: whiteness of each output's residual and
@@ -437,8 +432,8 @@ ResidualAnalysisResult analyze_residuals(const Eigen::MatrixBase<DE>& e_in, cons
     if (!(r.rms(i) > 0.0)) {
       r.warnings.push_back("the residual of " + out_name(i) + " is constant: its correlations are undefined (reported as 0)");
     } else if (std::abs(r.mean(i)) > r.z * r.rms(i) / sqrt_n) {
-      r.warnings.push_back("the residual of " + out_name(i) + " has a mean of " + detail::short_number(r.mean(i)) +
-                           " (" + detail::short_number(r.mean(i) / r.rms(i)) +
+      r.warnings.push_back("the residual of " + out_name(i) + " has a mean of " + format_number(r.mean(i), 2) +
+                           " (" + format_number(r.mean(i) / r.rms(i), 2) +
                            " rms), outside its bound: an offset the model does not explain");
     }
   }
@@ -520,7 +515,7 @@ ResidualAnalysisResult analyze_residuals(const Eigen::MatrixBase<DE>& e_in, cons
     }
     const bool lb_rejects = r.ljung_box_p(i) < alpha;
     v.white = !(lb_rejects || strong || strong_cross);
-    const std::string lb_text = "Ljung-Box p = " + detail::short_number(r.ljung_box_p(i));
+    const std::string lb_text = "Ljung-Box p = " + format_number(r.ljung_box_p(i), 2);
     if (v.white) {
       v.whiteness = "white";
       if (!v.lags_outside.empty())
@@ -531,7 +526,7 @@ ResidualAnalysisResult analyze_residuals(const Eigen::MatrixBase<DE>& e_in, cons
       if (!v.lags_outside.empty())
         why.push_back("autocorrelation outside the " + pct + " bound at " + detail::lag_word(v.lags_outside) +
                       detail::format_lags(v.lags_outside));
-      if (lb_rejects) why.push_back(lb_text + " < " + detail::short_number(alpha));
+      if (lb_rejects) why.push_back(lb_text + " < " + format_number(alpha, 2));
       for (Eigen::Index j = 0; j < l; ++j) {
         const auto& lags = v.output_lags_outside[static_cast<std::size_t>(j)];
         if (!lags.empty())
