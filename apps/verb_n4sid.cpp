@@ -150,6 +150,7 @@ std::string format_sweep_table(const std::vector<OrderSweepEntry>& table, const 
     for (Eigen::Index i = 0; i < e.estimation_fit.size(); ++i) cell(e.estimation_fit(i), 14);
     for (Eigen::Index i = 0; i < e.validation_fit.size(); ++i) cell(e.validation_fit(i), 14);
     if (names.size() > 1) cell(e.mean_validation_fit(), 10);
+    if (e.ok && e.spectral_radius >= 1.0) s << "  unstable (largest |pole| " << fmt(e.spectral_radius, 4) << ")";
     s << "\n";
   }
   return s.str();

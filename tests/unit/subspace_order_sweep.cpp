@@ -1,3 +1,4 @@
+#include <sysid/core/poles_zeros.hpp>
 #include <sysid/core/simulate.hpp>
 #include <sysid/subspace/order_sweep.hpp>
 
@@ -54,7 +55,24 @@ TEST(OrderSweep, ValidationFitPeaksAtTheTrueOrder) {
     for (const auto& entry : table) EXPECT_EQ(entry.result.horizon, horizon_hi);
     // Estimation fit is n4sid's own.
     EXPECT_NEAR(table[2].estimation_fit(0), table[2].result.fit_percent(0), 1e-12);
+    // The largest |pole| of each model: at the true order, the truth's.
+    EXPECT_NEAR(table[2].spectral_radius, poles(truth).cwiseAbs().maxCoeff(), 5e-3) << "seed " << seed;
   }
+}
+
+TEST(OrderSweep, SpectralRadiusFlagsAnUnstableModel) {
+  // An unstable plant (one real pole at 1.01) identified at its order: the
+  // entry's spectral radius is >= 1, which the CLI table marks. (The estimate is
+  // 1.0135: the mean removed from an exponentially growing record is not an
+  // offset of the plant, which biases the pole a little.)
+  Eigen::MatrixXd A(2, 2);
+  A << 1.01, 0.0, 0.0, 0.5;
+  const StateSpace truth(A, Eigen::MatrixXd::Ones(2, 1), Eigen::MatrixXd::Ones(1, 2), Eigen::MatrixXd::Zero(1, 1), 1.0);
+  const IoData est = noisy_data(truth, 400, 3, 0.001), val = noisy_data(truth, 300, 4, 0.001);
+  const std::vector<OrderSweepEntry> table = n4sid_order_sweep(est, val, {}, 2, 2);
+  ASSERT_TRUE(table[0].ok);
+  EXPECT_GT(table[0].spectral_radius, 1.0);
+  EXPECT_LT(table[0].spectral_radius, 1.02);
 }
 
 TEST(OrderSweep, MimoHasOneFitPerOutput) {

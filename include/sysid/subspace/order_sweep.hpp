@@ -20,6 +20,7 @@
 /// matrix, so the cost is (hi - lo + 1) times one n4sid() at horizon(hi).
 #include <sysid/core/errors.hpp>
 #include <sysid/core/io_data.hpp>
+#include <sysid/core/poles_zeros.hpp>
 #include <sysid/subspace/n4sid.hpp>
 #include <sysid/validate/compare.hpp>
 
@@ -38,6 +39,9 @@ struct OrderSweepEntry {
   Eigen::VectorXd validation_fit;  ///< per output, simulation fit on the validation data, x0 estimated
   std::vector<std::string> warnings;  ///< n4sid's warnings, or why this order failed (then the fits are NaN)
   bool ok = false;                    ///< false when the identification failed (NumericalError) at this order
+  /// Largest |pole| of the model (when ok): >= 1 is an unstable model, whose
+  /// simulation fit says little (an order too high for a stable plant often is).
+  double spectral_radius = std::numeric_limits<double>::quiet_NaN();
   N4sidResult result;                 ///< the identified model and diagnostics (when ok)
 
   /// Mean validation fit over the outputs (NaN when the order failed).
@@ -87,6 +91,7 @@ inline std::vector<OrderSweepEntry> n4sid_order_sweep(const IoData& estimation, 
       return entry;
     }
     entry.ok = true;
+    entry.spectral_radius = entry.result.model.A.size() > 0 ? poles(entry.result.model).cwiseAbs().maxCoeff() : 0.0;
     entry.warnings = entry.result.warnings;
     entry.estimation_fit = entry.result.fit_percent;
     CompareOptions co;
