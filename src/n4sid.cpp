@@ -244,7 +244,7 @@ inline void select_order_when_svc_finds_none(SubspaceCore& res, int top, Eigen::
   const CanonicalCorrelationTest test = bartlett_zero_correlation_test(
       res.canonical_correlations, std::max<Eigen::Index>(test_samples, 1), future_rows, std::max<Eigen::Index>(past_rows, 1));
   std::ostringstream why;
-  why << std::setprecision(4) << "Bauer's SVC chose order 0 (its penalty " << std::log(static_cast<double>(columns)) / static_cast<double>(columns) * static_cast<double>(2 * l + m)
+  why << std::setprecision(4) << "Bauer's SVC chose order 0 (its penalty " << svc_penalty_per_order(columns, l, m)
       << " per order, from " << columns << " Hankel columns, " << l << " output(s) and " << m
       << " input(s), exceeds every drop of the squared canonical correlations " << res.canonical_correlations(0);
   if (res.canonical_correlations.size() > 1) why << ", " << res.canonical_correlations(1);

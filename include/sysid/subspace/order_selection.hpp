@@ -63,6 +63,11 @@ inline OrderChoice choose_order_by_gap(const Eigen::VectorXd& sv, int max_order)
   return best;
 }
 
+/// What SVC adds per unit of order: C(N)/N d(1) = log(N)/N (2l + m).
+inline double svc_penalty_per_order(Eigen::Index samples, Eigen::Index outputs, Eigen::Index inputs) {
+  return std::log(static_cast<double>(samples)) / static_cast<double>(samples) * static_cast<double>(2 * outputs + inputs);
+}
+
 /// Bauer's SVC on canonical correlations (CVA singular values); samples = Hankel columns.
 inline OrderChoice choose_order_by_svc(const Eigen::VectorXd& sv, int max_order, Eigen::Index samples, Eigen::Index outputs,
                                        Eigen::Index inputs) {
@@ -70,11 +75,11 @@ inline OrderChoice choose_order_by_svc(const Eigen::VectorXd& sv, int max_order,
   if (top < 1 || samples < 2) throw std::invalid_argument("order selection: need max_order >= 1 and samples >= 2");
   OrderChoice best;
   best.score = std::numeric_limits<double>::infinity();
-  const double penalty = std::log(static_cast<double>(samples)) / static_cast<double>(samples);
+  // d(n) = 2 n l + n m parameters of (A, B, C) beyond the trivial ones (Bauer 2001, eq. 7 uses 2 n s).
+  const double penalty = svc_penalty_per_order(samples, outputs, inputs);
   for (int n = 0; n <= top; ++n) {
     const double next = std::min(1.0, sv(n));
-    // d(n) = 2 n l + n m parameters of (A, B, C) beyond the trivial ones (Bauer 2001, eq. 7 uses 2 n s).
-    const double score = next * next + penalty * static_cast<double>(n * (2 * outputs + inputs));
+    const double score = next * next + penalty * static_cast<double>(n);
     if (score < best.score) {
       best.score = score;
       best.order = n;
