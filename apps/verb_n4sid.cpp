@@ -189,7 +189,10 @@ void run_n4sid(const N4sidArgs& a) {
   options.max_order = a.max_order;
   options.order_rule = a.order_rule == "svc" ? OrderRule::svc : OrderRule::gap;
   options.horizon = a.horizon;
-  options.route = a.hankel == "qr" ? HankelRoute::qr : a.hankel == "cholesky" ? HankelRoute::cholesky : HankelRoute::automatic;
+  options.route = a.hankel == "qr"                       ? HankelRoute::qr
+                  : a.hankel == "cholesky"               ? HankelRoute::cholesky
+                  : a.hankel == "cholesky_double_double" ? HankelRoute::cholesky_double_double
+                                                         : HankelRoute::automatic;
   options.enforce_stability = a.enforce_stability;
   // --band-limit: the Par2 remedy for gain the data do not determine above the
   // excited band (the model comes back in series with the low-pass at its inputs).
@@ -348,9 +351,12 @@ Verb register_n4sid(CLI::App& app) {
   cmd->add_option("--horizon", args->horizon, "block rows i of the past/future Hankel matrix (default: automatic)")
       ->check(CLI::Range(2, 100000));
   cmd->add_flag("--enforce-stability", args->enforce_stability, "estimate A so that the model is always stable");
-  cmd->add_option("--hankel", args->hankel, "Hankel compression route: auto, qr (most accurate) or cholesky (fastest)")
+  cmd->add_option("--hankel", args->hankel,
+                  "Hankel compression route: qr (Householder), cholesky (structured Gram matrix: fastest, squares the "
+                  "condition number), cholesky_double_double (the same Gram matrix in double-double: as accurate as qr "
+                  "up to cond 1e15), or auto (cholesky, else cholesky_double_double, else qr)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"auto", "qr", "cholesky"}));
+      ->check(CLI::IsMember({"auto", "qr", "cholesky", "cholesky_double_double"}));
   add_validation_options(*cmd, args->validate, args->split);
   cmd->add_option("--band-limit", args->band_limit_hz,
                   "HZ: low-pass inputs and outputs (Butterworth) before identification and put the filter in series "

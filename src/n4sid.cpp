@@ -141,33 +141,35 @@ inline BdxEstimate estimate_bdx(const Eigen::MatrixXd& A, const Eigen::MatrixXd&
   // Rows of `block` samples are formed together and handed to the QR at once;
   // the recursions reuse their buffers (no allocation per sample).
   const Eigen::Index block = 256;
-  Eigen::MatrixXd rows(block * l, p + 1), next(l, n);
-  std::vector<Eigen::MatrixXd> psi(static_cast<std::size_t>(m));
+  Eigen::MatrixXd rows(block * l, p + 1);
+  // The recursions of every input and of Lambda advance together, one small
+  // product per sample, on the transposed state: columns q l .. q l + l - 1 of
+  // `state` hold Psi_q^T, the last l columns Lambda^T, so state <- A^T state
+  // runs down contiguous columns of A^T (vectorised). lazyProduct keeps this
+  // n x n times n x (m+1) l product inline: the general GEMV/GEMM dispatch
+  // costs more than the product itself at these sizes.
+  const Eigen::MatrixXd At = A.transpose(), Ct = C.transpose();
+  Eigen::MatrixXd state(n, (m + 1) * l), next(n, (m + 1) * l);
   for (Eigen::Index e = 0; e < experiments; ++e) {
     const Experiment& ex = data.experiments[static_cast<std::size_t>(e)];
     const Eigen::Index samples = std::min(ex.samples(), max_samples);
     out.samples_used += samples;
-    for (auto& ps : psi) ps = Eigen::MatrixXd::Zero(l, n);
-    Eigen::MatrixXd lambda = C;
+    state.leftCols(m * l).setZero();
+    state.rightCols(l) = Ct;
     for (Eigen::Index start = 0; start < samples; start += block) {
       const Eigen::Index count = std::min(block, samples - start);
       rows.topRows(count * l).setZero();
       for (Eigen::Index k = 0; k < count; ++k) {
         const Eigen::Index t = start + k;
         auto r_t = rows.middleRows(k * l, l);
-        for (Eigen::Index q = 0; q < m; ++q) r_t.middleCols(q * n, n) = psi[static_cast<std::size_t>(q)];
+        for (Eigen::Index q = 0; q < m; ++q) r_t.middleCols(q * n, n) = state.middleCols(q * l, l).transpose();
         for (Eigen::Index q = 0; q < m; ++q)
           for (Eigen::Index r = 0; r < l; ++r) r_t(r, n * m + q * l + r) = ex.u(t, q);
-        r_t.middleCols(n * m + l * m + e * n, n) = lambda;
+        r_t.middleCols(n * m + l * m + e * n, n) = state.rightCols(l).transpose();
         r_t.col(p) = ex.y.row(t).transpose();
-        for (Eigen::Index q = 0; q < m; ++q) {
-          Eigen::MatrixXd& ps = psi[static_cast<std::size_t>(q)];
-          next.noalias() = ps * A;
-          next += ex.u(t, q) * C;
-          ps.swap(next);
-        }
-        next.noalias() = lambda * A;
-        lambda.swap(next);
+        next.noalias() = At.lazyProduct(state);
+        for (Eigen::Index q = 0; q < m; ++q) next.middleCols(q * l, l) += ex.u(t, q) * Ct;
+        state.swap(next);
       }
       qr.add_rows(rows.topRows(count * l));
     }

@@ -1,0 +1,173 @@
+#include <sysid/core/double_double.hpp>
+#include <sysid/core/double_double_cholesky.hpp>
+#include <sysid/core/detail/lagged_sums.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "random_matrices.hpp"
+
+namespace test_unit_core_double_double {
+
+using namespace sysid;
+
+namespace {
+
+// The reference arithmetic: IEEE binary128 (113-bit significand), which holds
+// the exact product of two doubles and double-double values exactly.
+using quad = __float128;
+
+quad as_quad(const DoubleDouble& x) { return static_cast<quad>(x.hi) + static_cast<quad>(x.lo); }
+
+double relative(quad got, quad want) {
+  const quad diff = got - want;
+  const quad scale = want < 0 ? -want : want;
+  return static_cast<double>((diff < 0 ? -diff : diff) / scale);
+}
+
+/// Random double-double with hi spread over several decades and lo a proper tail.
+DoubleDouble random_double_double(std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> mantissa(0.5, 1.0), sign(-1.0, 1.0);
+  std::uniform_int_distribution<int> exponent(-20, 20);
+  const double hi = std::ldexp(mantissa(rng), exponent(rng)) * (sign(rng) < 0 ? -1.0 : 1.0);
+  const double lo = hi * 1e-17 * sign(rng);
+  return two_sum(hi, lo);
+}
+
+}  // namespace
+
+TEST(DoubleDouble, ErrorFreeTransformationsAreExact) {
+  std::mt19937_64 rng(41);
+  for (int k = 0; k < 20000; ++k) {
+    const double a = random_double_double(rng).hi, b = random_double_double(rng).hi;
+    const DoubleDouble p = two_prod(a, b);
+    EXPECT_TRUE(as_quad(p) == static_cast<quad>(a) * static_cast<quad>(b)) << a << " * " << b;
+    EXPECT_EQ(p.hi, a * b);
+    const DoubleDouble s = two_sum(a, b);
+    EXPECT_TRUE(as_quad(s) == static_cast<quad>(a) + static_cast<quad>(b)) << a << " + " << b;
+    EXPECT_EQ(s.hi, a + b);
+  }
+}
+
+TEST(DoubleDouble, OperationsAreAccurateToAFewUnitsOfTwoToTheMinus106) {
+  // u^2 = 2^-106 = 1.2e-32; the bounds of Joldes, Muller & Popescu (2017) are a
+  // few u^2 for +, * and /, and the Newton square root is of the same order.
+  std::mt19937_64 rng(42);
+  double worst_add = 0, worst_mul = 0, worst_div = 0, worst_sqrt = 0;
+  for (int k = 0; k < 20000; ++k) {
+    const DoubleDouble x = random_double_double(rng), y = random_double_double(rng);
+    const quad qx = as_quad(x), qy = as_quad(y);
+    if (qx + qy != 0) worst_add = std::max(worst_add, relative(as_quad(x + y), qx + qy));
+    worst_mul = std::max(worst_mul, relative(as_quad(x * y), qx * qy));
+    worst_div = std::max(worst_div, relative(as_quad(x / y), qx / qy));
+    const DoubleDouble ax = x.hi < 0 ? -x : x;
+    const DoubleDouble r = sqrt(ax);
+    worst_sqrt = std::max(worst_sqrt, relative(as_quad(r) * as_quad(r), as_quad(ax)));
+  }
+  const double u2 = std::ldexp(1.0, -106);
+  EXPECT_LT(worst_add, 3 * u2);
+  EXPECT_LT(worst_mul, 7 * u2);
+  EXPECT_LT(worst_div, 16 * u2);
+  EXPECT_LT(worst_sqrt, 8 * u2);  // relative error of r^2, twice that of r
+  EXPECT_EQ(sqrt(DoubleDouble(0.0)).hi, 0.0);
+  EXPECT_TRUE(std::isnan(sqrt(DoubleDouble(-1.0)).hi));
+}
+
+TEST(DoubleDouble, LaggedCorrelationSumsSurviveCancellation) {
+  // sum_t x(t) y(t+q) over 100 000 samples where y is 1 + 1e-13 noise and x
+  // comes in pairs x, -x: each pair cancels to 1e-13 of its terms, and the
+  // sum is ~4e-16 of sum |x y|. Double keeps about three digits of it,
+  // double-double (error ~1e-28 of sum |x y|) more than ten.
+  const Eigen::Index n = 100000, lags = 7;
+  const Eigen::MatrixXd w = test::white_noise(n + lags, 2, 5);
+  Eigen::VectorXd x = w.col(0);
+  const Eigen::VectorXd y = Eigen::VectorXd::Ones(n + lags) + 1e-13 * w.col(1);
+  for (Eigen::Index t = 0; t < n; t += 2) x(t + 1) = -x(t);
+  std::vector<DoubleDouble> got(lags);
+  detail::correlate_double_double(x.data(), y.data(), n, lags, got.data());
+  for (Eigen::Index q = 0; q < lags; ++q) {
+    quad exact = 0, magnitude = 0;
+    double plain = 0;
+    for (Eigen::Index t = 0; t < n; ++t) {
+      const quad p = static_cast<quad>(x(t)) * static_cast<quad>(y(t + q));
+      exact += p;
+      magnitude += p < 0 ? -p : p;
+      plain += x(t) * y(t + q);
+    }
+    const quad error = as_quad(got[static_cast<std::size_t>(q)]) - exact;
+    const double abs_error = static_cast<double>(error < 0 ? -error : error);
+    const double abs_exact = std::abs(static_cast<double>(exact));
+    EXPECT_LT(abs_error / static_cast<double>(magnitude), 1e-28) << "lag " << q;
+    EXPECT_LT(abs_error / abs_exact, 1e-10) << "lag " << q;
+    EXPECT_GT(std::abs(plain - static_cast<double>(exact)) / abs_exact, 1e-6)
+        << "lag " << q << ": the case does not need double-double";
+  }
+}
+
+TEST(DoubleDoubleCholesky, FactorsAGramMatrixThatDoubleCannot) {
+  // H with singular values 1 .. 1e-11 (cond(G) = 1e22 > 1 / u): Eigen's LLT
+  // of the Gram matrix rounded to double fails or is far off; the double-double
+  // factor reproduces G to ~1e-30 of its norm.
+  std::mt19937_64 rng(7);
+  const Eigen::Index rows = 60, k = 12;
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qu(test::randn(rng, rows, k)), qv(test::randn(rng, k, k));
+  const Eigen::MatrixXd U = qu.householderQ() * Eigen::MatrixXd::Identity(rows, k);
+  const Eigen::MatrixXd V = qv.householderQ() * Eigen::MatrixXd::Identity(k, k);
+  Eigen::VectorXd sv(k);
+  for (Eigen::Index i = 0; i < k; ++i) sv(i) = std::pow(10.0, -11.0 * static_cast<double>(i) / static_cast<double>(k - 1));
+  const Eigen::MatrixXd H = U * sv.asDiagonal() * V.transpose();
+  // G = H^T H exactly enough: every entry summed in binary128, then split.
+  DoubleDoubleMatrix G{Eigen::MatrixXd(k, k), Eigen::MatrixXd(k, k)};
+  std::vector<quad> gq(static_cast<std::size_t>(k * k));
+  for (Eigen::Index i = 0; i < k; ++i)
+    for (Eigen::Index j = 0; j < k; ++j) {
+      quad s = 0;
+      for (Eigen::Index r = 0; r < rows; ++r) s += static_cast<quad>(H(r, i)) * static_cast<quad>(H(r, j));
+      gq[static_cast<std::size_t>(j * k + i)] = s;
+      const double hi = static_cast<double>(s);
+      G.set(i, j, {hi, static_cast<double>(s - static_cast<quad>(hi))});
+    }
+  const DoubleDoubleCholeskyResult chol = double_double_cholesky(G);
+  ASSERT_TRUE(chol.positive_definite);
+  EXPECT_TRUE(chol.R.isUpperTriangular());
+  EXPECT_GT(chol.smallest_pivot_ratio, 1e-12);  // >= sigma_min / sigma_max = 1e-11 up to rounding
+  EXPECT_LE(chol.smallest_pivot_ratio, 1.0);
+  // Residual of R^T R against G, relative to ||G|| ~ 1, in binary128. R is
+  // rounded to double, so the bound is that of a double R: ~u ||G||.
+  double worst = 0;
+  for (Eigen::Index i = 0; i < k; ++i)
+    for (Eigen::Index j = 0; j < k; ++j) {
+      quad s = 0;
+      for (Eigen::Index r = 0; r < k; ++r) s += static_cast<quad>(chol.R(r, i)) * static_cast<quad>(chol.R(r, j));
+      const quad d = s - gq[static_cast<std::size_t>(j * k + i)];
+      worst = std::max(worst, static_cast<double>(d < 0 ? -d : d));
+    }
+  EXPECT_LT(worst, 1e-15);
+  // The small end: R's singular values are H's (to ~u of each, far better than
+  // the u ||H|| of any double factorisation), while double's LLT cannot deliver them.
+  const Eigen::VectorXd r_sv = Eigen::JacobiSVD<Eigen::MatrixXd>(chol.R).singularValues();
+  for (Eigen::Index i = 0; i < k; ++i) EXPECT_NEAR(r_sv(i) / sv(i), 1.0, 1e-4) << "singular value " << i;
+  const Eigen::LLT<Eigen::MatrixXd> plain(G.hi);
+  if (plain.info() == Eigen::Success) {
+    const Eigen::MatrixXd Rd = plain.matrixU();
+    const Eigen::VectorXd d_sv = Eigen::JacobiSVD<Eigen::MatrixXd>(Rd).singularValues();
+    EXPECT_GT(std::abs(d_sv(k - 1) / sv(k - 1) - 1.0), 1e-2) << "the case does not need double-double";
+  }
+}
+
+TEST(DoubleDoubleCholesky, ReportsASingularMatrix) {
+  // Two equal rows and columns: the third pivot is zero up to double-double rounding, of either sign.
+  const Eigen::MatrixXd h = test::white_noise(50, 4, 3);
+  Eigen::MatrixXd g = h.transpose() * h;
+  g.row(2) = g.row(1);  // exactly, not up to the rounding of two dot products
+  g.col(2) = g.col(1);
+  const DoubleDoubleCholeskyResult chol = double_double_cholesky({g, Eigen::MatrixXd::Zero(4, 4)});
+  EXPECT_TRUE(!chol.positive_definite || chol.smallest_pivot_ratio < 1e-14) << chol.smallest_pivot_ratio;
+  const DoubleDoubleCholeskyResult negative = double_double_cholesky({-Eigen::MatrixXd::Identity(3, 3), Eigen::MatrixXd::Zero(3, 3)});
+  EXPECT_FALSE(negative.positive_definite);
+}
+
+}  // namespace test_unit_core_double_double
