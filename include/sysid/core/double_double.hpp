@@ -54,18 +54,30 @@ inline DoubleDouble fast_two_sum(double a, double b) {
   return {s, b - (s - a)};
 }
 
-/// p + e == a * b exactly (barring underflow).
-inline DoubleDouble two_prod(double a, double b) {
+/// p + e == a * b exactly (barring underflow), by one fused multiply-add.
+inline DoubleDouble two_prod_fma(double a, double b) {
   const double p = a * b;
-#ifdef FP_FAST_FMA
   return {p, std::fma(a, b, -p)};
-#else
-  // Veltkamp's splitting into 26-bit halves, then Dekker's exact product.
+}
+
+/// p + e == a * b exactly (barring underflow and overflow of 2^27 a), without
+/// an fma: Veltkamp's splitting into 26-bit halves, then Dekker's exact product.
+inline DoubleDouble two_prod_dekker(double a, double b) {
   constexpr double split = 134217729.0;  // 2^27 + 1
+  const double p = a * b;
   const double ta = split * a, tb = split * b;
   const double ah = ta - (ta - a), al = a - ah;
   const double bh = tb - (tb - b), bl = b - bh;
   return {p, ((ah * bh - p) + ah * bl + al * bh) + al * bl};
+}
+
+/// p + e == a * b exactly: the fma form where the hardware has one (a software
+/// fma would be a slow library call), Dekker's otherwise.
+inline DoubleDouble two_prod(double a, double b) {
+#ifdef FP_FAST_FMA
+  return two_prod_fma(a, b);
+#else
+  return two_prod_dekker(a, b);
 #endif
 }
 
