@@ -1,6 +1,5 @@
 #include <sysid/core/double_double.hpp>
 #include <sysid/core/double_double_cholesky.hpp>
-#include <sysid/core/detail/lagged_sums.hpp>
 
 #include <gtest/gtest.h>
 
@@ -76,37 +75,6 @@ TEST(DoubleDouble, OperationsAreAccurateToAFewUnitsOfTwoToTheMinus106) {
   EXPECT_LT(worst_sqrt, 8 * u2);  // relative error of r^2, twice that of r
   EXPECT_EQ(sqrt(DoubleDouble(0.0)).hi, 0.0);
   EXPECT_TRUE(std::isnan(sqrt(DoubleDouble(-1.0)).hi));
-}
-
-TEST(DoubleDouble, LaggedCorrelationSumsSurviveCancellation) {
-  // sum_t x(t) y(t+q) over 100 000 samples where y is 1 + 1e-13 noise and x
-  // comes in pairs x, -x: each pair cancels to 1e-13 of its terms, and the
-  // sum is ~4e-16 of sum |x y|. Double keeps about three digits of it,
-  // double-double (error ~1e-28 of sum |x y|) more than ten.
-  const Eigen::Index n = 100000, lags = 7;
-  const Eigen::MatrixXd w = test::white_noise(n + lags, 2, 5);
-  Eigen::VectorXd x = w.col(0);
-  const Eigen::VectorXd y = Eigen::VectorXd::Ones(n + lags) + 1e-13 * w.col(1);
-  for (Eigen::Index t = 0; t < n; t += 2) x(t + 1) = -x(t);
-  std::vector<DoubleDouble> got(lags);
-  detail::correlate_double_double(x.data(), y.data(), n, lags, got.data());
-  for (Eigen::Index q = 0; q < lags; ++q) {
-    quad exact = 0, magnitude = 0;
-    double plain = 0;
-    for (Eigen::Index t = 0; t < n; ++t) {
-      const quad p = static_cast<quad>(x(t)) * static_cast<quad>(y(t + q));
-      exact += p;
-      magnitude += p < 0 ? -p : p;
-      plain += x(t) * y(t + q);
-    }
-    const quad error = as_quad(got[static_cast<std::size_t>(q)]) - exact;
-    const double abs_error = static_cast<double>(error < 0 ? -error : error);
-    const double abs_exact = std::abs(static_cast<double>(exact));
-    EXPECT_LT(abs_error / static_cast<double>(magnitude), 1e-28) << "lag " << q;
-    EXPECT_LT(abs_error / abs_exact, 1e-10) << "lag " << q;
-    EXPECT_GT(std::abs(plain - static_cast<double>(exact)) / abs_exact, 1e-6)
-        << "lag " << q << ": the case does not need double-double";
-  }
 }
 
 TEST(DoubleDoubleCholesky, FactorsAGramMatrixThatDoubleCannot) {

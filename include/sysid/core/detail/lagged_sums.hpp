@@ -5,11 +5,14 @@
 /// block-Hankel compression's correlation route (hankel/block_hankel.hpp) and
 /// by the order of persistent excitation (core/persistent_excitation.hpp).
 /// lagged_sums_double_double forms the same sums to about 1e-30 relative, for
-/// Gram matrices whose condition number exceeds 1 / (double's unit roundoff).
+/// Gram matrices whose condition number exceeds 1 / (double's unit roundoff);
+/// shifted_columns_gram_double_double the Gram matrix of any set of columns
+/// that are shifted copies of a few signals (a prediction-error Jacobian).
 #include <Eigen/Dense>
 #include <sysid/core/double_double.hpp>
 
 #include <algorithm>
+#include <stdexcept>
 #include <vector>
 
 namespace sysid::detail {
@@ -120,6 +123,85 @@ DoubleDoubleMatrix lagged_sums_double_double(const MX& x_in, const MY& y_in, Eig
                 s((p - 1) * mx + a, (q - 1) * my + b) + two_prod(x(p - 1 + j, a), y(q - 1 + j, b)) -
                     two_prod(x(p - 1, a), y(q - 1, b)));
   return s;
+}
+
+/// Column `sign * signals[signal](t - shift)` of a matrix with one row per
+/// sample t = 0..n-1, zero for t < shift (a regressor filtered from rest).
+struct ShiftedColumn {
+  std::size_t signal = 0;
+  Eigen::Index shift = 0;
+  double sign = 1.0;
+};
+
+/// Gram matrix G(a, b) = sum_{t<n} c_a(t) c_b(t) of ShiftedColumns, in
+/// double-double, without forming the n x p matrix: O(n L) work for the L
+/// distinct lags between the signals' shift ranges instead of O(n p^2).
+///
+/// Method: for signals x, y (zero before t = 0) let S(i, j) = sum_{t<n}
+/// x(t - i) y(t - j). Shifting both by one drops the last sample:
+///   S(i, j) = S(i - 1, j - 1) - x(n - i) y(n - j),
+/// so every S on a diagonal i - j = L follows from its start, a correlation
+/// sum at lag L: S(L, 0) = sum_s x(s) y(s + L) and S(0, L) = sum_s y(s) x(s + L)
+/// (correlate_double_double, on copies zero-padded at the end). Only the lags
+/// between the shift ranges that columns actually use are summed.
+///
+/// Preconditions: every signal has the same length n, and n > every shift
+/// (std::invalid_argument otherwise).
+inline DoubleDoubleMatrix shifted_columns_gram_double_double(const std::vector<Eigen::VectorXd>& signals,
+                                                             const std::vector<ShiftedColumn>& columns) {
+  const std::size_t count = signals.size();
+  const Eigen::Index n = count > 0 ? signals.front().size() : 0, p = static_cast<Eigen::Index>(columns.size());
+  std::vector<Eigen::Index> lo(count, n), hi(count, -1);
+  Eigen::Index max_shift = 0;
+  for (const ShiftedColumn& c : columns) {
+    if (c.signal >= count || c.shift < 0) throw std::invalid_argument("shifted_columns_gram: column refers to no signal");
+    lo[c.signal] = std::min(lo[c.signal], c.shift);
+    hi[c.signal] = std::max(hi[c.signal], c.shift);
+    max_shift = std::max(max_shift, c.shift);
+  }
+  for (const auto& x : signals)
+    if (x.size() != n || n <= max_shift)
+      throw std::invalid_argument("shifted_columns_gram: signals of unequal length or not longer than the largest shift");
+  std::vector<Eigen::VectorXd> padded(count);
+  for (std::size_t k = 0; k < count; ++k) {
+    padded[k] = Eigen::VectorXd::Zero(n + max_shift + 1);
+    padded[k].head(n) = signals[k];
+  }
+  // table[a * count + b] (a <= b): S_ab(i, j) for i <= hi[a], j <= hi[b].
+  std::vector<DoubleDoubleMatrix> table(count * count);
+  std::vector<DoubleDouble> base;
+  for (std::size_t a = 0; a < count; ++a)
+    for (std::size_t b = a; b < count; ++b) {
+      if (hi[a] < 0 || hi[b] < 0) continue;
+      const Eigen::VectorXd &x = padded[a], &y = padded[b];
+      DoubleDoubleMatrix& s = table[a * count + b];
+      s = {Eigen::MatrixXd::Zero(hi[a] + 1, hi[b] + 1), Eigen::MatrixXd::Zero(hi[a] + 1, hi[b] + 1)};
+      // Diagonals i - j = L >= 0 start at S(L, 0); those with j - i = L > 0 at S(0, L).
+      const Eigen::Index below = hi[a] - lo[b], above = hi[b] - lo[a];
+      if (below >= 0) {
+        base.assign(static_cast<std::size_t>(below + 1), DoubleDouble());
+        correlate_double_double(x.data(), y.data(), n, below + 1, base.data());
+        for (Eigen::Index lag = 0; lag <= std::min(below, hi[a]); ++lag) s.set(lag, 0, base[static_cast<std::size_t>(lag)]);
+      }
+      if (above >= 1) {
+        base.assign(static_cast<std::size_t>(above + 1), DoubleDouble());
+        correlate_double_double(y.data(), x.data(), n, above + 1, base.data());
+        for (Eigen::Index lag = 1; lag <= std::min(above, hi[b]); ++lag) s.set(0, lag, base[static_cast<std::size_t>(lag)]);
+      }
+      for (Eigen::Index i = 1; i <= hi[a]; ++i)
+        for (Eigen::Index j = 1; j <= hi[b]; ++j) s.set(i, j, s(i - 1, j - 1) - two_prod(x(n - i), y(n - j)));
+    }
+  DoubleDoubleMatrix gram{Eigen::MatrixXd(p, p), Eigen::MatrixXd(p, p)};
+  for (Eigen::Index r = 0; r < p; ++r)
+    for (Eigen::Index c = 0; c < p; ++c) {
+      const ShiftedColumn &u = columns[static_cast<std::size_t>(r)], &v = columns[static_cast<std::size_t>(c)];
+      const bool ordered = u.signal <= v.signal;
+      const DoubleDoubleMatrix& s = ordered ? table[u.signal * count + v.signal] : table[v.signal * count + u.signal];
+      const DoubleDouble value = ordered ? s(u.shift, v.shift) : s(v.shift, u.shift);
+      const double sign = u.sign * v.sign;
+      gram.set(r, c, {sign * value.hi, sign * value.lo});
+    }
+  return gram;
 }
 
 }  // namespace sysid::detail
