@@ -220,13 +220,18 @@ inline BlockHankelCompression compress_block_hankel(const IoData& data, const Bl
     DoubleDoubleMatrix gram{Eigen::MatrixXd::Zero(k, k), Eigen::MatrixXd::Zero(k, k)};
     for (const auto& e : data.experiments) detail::add_gram_double_double(e, out.layout, gram);
     DoubleDoubleCholeskyResult chol = double_double_cholesky(gram);
-    if (chol.positive_definite && chol.smallest_pivot_ratio >= options.min_pivot_ratio) {
+    const bool forced = options.route == HankelRoute::cholesky_double_double;
+    if (chol.positive_definite && (chol.smallest_pivot_ratio >= options.min_pivot_ratio || forced)) {
+      if (chol.smallest_pivot_ratio < options.min_pivot_ratio)
+        out.warnings.push_back("block-hankel: smallest Cholesky pivot ratio " + format_number(chol.smallest_pivot_ratio) +
+                               " on the forced cholesky_double_double route: the data are rank deficient to double "
+                               "precision");
       out.R = std::move(chol.R);
       out.gram_condition_estimate = detail::diag_condition(out.R);
       out.route_used = HankelRoute::cholesky_double_double;
       return out;
     }
-    if (options.route == HankelRoute::cholesky_double_double)
+    if (forced)
       throw std::invalid_argument(
           "block-hankel: double-double Cholesky factorisation of the Gram matrix failed (data rank deficient)");
     out.warnings.push_back("block-hankel: the data are rank deficient to double precision (" +
