@@ -211,9 +211,7 @@ std::optional<Eigen::MatrixXd> gram_jacobian_factor(const std::vector<FilteredRe
     Eigen::Index max_shift = 0;
     for (const auto& c : columns) max_shift = std::max(max_shift, c.shift);
     if (fr.eps.size() <= max_shift) return std::nullopt;  // a record shorter than the lags: only the QR route has rows for it
-    const DoubleDoubleMatrix g = detail::shifted_columns_gram_double_double(signals, columns);
-    for (Eigen::Index c = 0; c <= p; ++c)
-      for (Eigen::Index r = 0; r <= p; ++r) gram.set(r, c, gram(r, c) + g(r, c));
+    add_block(gram, 0, 0, detail::shifted_columns_gram_double_double(signals, columns));
   }
   DoubleDoubleCholeskyResult chol = double_double_cholesky(gram);
   if (!chol.positive_definite || !(chol.smallest_pivot_ratio >= 1e-14)) return std::nullopt;

@@ -133,4 +133,14 @@ struct DoubleDoubleMatrix {
   }
 };
 
+/// target(row.., col..) += block (or block^T), in double-double.
+inline void add_block(DoubleDoubleMatrix& target, Eigen::Index row, Eigen::Index col, const DoubleDoubleMatrix& block,
+                      bool transposed = false) {
+  const Eigen::Index rows = transposed ? block.hi.cols() : block.hi.rows();
+  const Eigen::Index cols = transposed ? block.hi.rows() : block.hi.cols();
+  for (Eigen::Index c = 0; c < cols; ++c)
+    for (Eigen::Index r = 0; r < rows; ++r)
+      target.set(row + r, col + c, target(row + r, col + c) + (transposed ? block(c, r) : block(r, c)));
+}
+
 }  // namespace sysid

@@ -136,23 +136,14 @@ inline void add_gram(const Experiment& e, const HankelLayout& lay, Eigen::Matrix
   gram.bottomRightCorner(ny, ny) += lagged_sums(e.y, e.y, i2, j, true);
 }
 
-/// gram(row.., col..) += s (or s^T), in double-double.
-inline void add_block(DoubleDoubleMatrix& gram, Eigen::Index row, Eigen::Index col, const DoubleDoubleMatrix& s,
-                      bool transposed) {
-  const Eigen::Index rows = transposed ? s.hi.cols() : s.hi.rows(), cols = transposed ? s.hi.rows() : s.hi.cols();
-  for (Eigen::Index c = 0; c < cols; ++c)
-    for (Eigen::Index r = 0; r < rows; ++r)
-      gram.set(row + r, col + c, gram(row + r, col + c) + (transposed ? s(c, r) : s(r, c)));
-}
-
 /// add_gram in double-double.
 inline void add_gram_double_double(const Experiment& e, const HankelLayout& lay, DoubleDoubleMatrix& gram) {
   const Eigen::Index i2 = 2 * lay.horizon, j = e.samples() - i2 + 1, nu = i2 * lay.inputs;
-  add_block(gram, 0, 0, lagged_sums_double_double(e.u, e.u, i2, j, true), false);
+  add_block(gram, 0, 0, lagged_sums_double_double(e.u, e.u, i2, j, true));
   const DoubleDoubleMatrix uy = lagged_sums_double_double(e.u, e.y, i2, j, false);
-  add_block(gram, 0, nu, uy, false);
-  add_block(gram, nu, 0, uy, true);
-  add_block(gram, nu, nu, lagged_sums_double_double(e.y, e.y, i2, j, true), false);
+  add_block(gram, 0, nu, uy);
+  add_block(gram, nu, 0, uy, /*transposed=*/true);
+  add_block(gram, nu, nu, lagged_sums_double_double(e.y, e.y, i2, j, true));
 }
 
 /// Folds the rows of H^T of one experiment into the streaming QR.
