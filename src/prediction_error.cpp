@@ -194,15 +194,16 @@ double cost_of(const PolynomialModel& model, const std::vector<ScaledRecord>& re
 /// R factor of [J eps] from its Gram matrix: the columns of J are shifted
 /// copies of a few filtered signals, and eps is one more signal, so the Gram
 /// matrix costs O(N L) for the L distinct lags (core/detail/lagged_sums.hpp)
-/// instead of the QR's O(N p^2): about 15 ms against 70 ms for ARMAX(32,32,26)
-/// on 40 000 samples. It is formed and factorised in double-double, because J
-/// is ill-conditioned (scaled condition 7.6e9 on that problem: a double Gram
-/// matrix would be indefinite); the result is then at least as accurate as the
-/// Householder R. Empty when the factorisation fails or a pivot ratio below
-/// 1e-14 shows [J eps] rank deficient to double precision (an exact fit, a
-/// column that is zero): the QR route decides those.
+/// instead of the QR's O(N p^2): about 19 ms against 45-70 ms for
+/// ARMAX(32,32,26) on 40 000 samples. It is formed and factorised in
+/// double-double, because J is ill-conditioned (scaled condition 5e15-2e16 on
+/// that problem, whose orders are 3x the true ones: a double Gram matrix is
+/// indefinite); the result is then at least as accurate as the Householder R.
+/// Empty when the factorisation fails or a pivot ratio below
+/// kRankDeficientPivotRatio shows [J eps] rank deficient to double precision
+/// (near common factors, an exact fit, a zero column): the QR route decides those.
 std::optional<Eigen::MatrixXd> gram_jacobian_factor(const std::vector<FilteredRegressors>& regressors, Eigen::Index p) {
-  DoubleDoubleMatrix gram{Eigen::MatrixXd::Zero(p + 1, p + 1), Eigen::MatrixXd::Zero(p + 1, p + 1)};
+  DoubleDoubleMatrix gram = DoubleDoubleMatrix::zero(p + 1, p + 1);
   for (const FilteredRegressors& fr : regressors) {
     std::vector<Eigen::VectorXd> signals = fr.signals;
     signals.push_back(fr.eps);
@@ -214,7 +215,7 @@ std::optional<Eigen::MatrixXd> gram_jacobian_factor(const std::vector<FilteredRe
     add_block(gram, 0, 0, detail::shifted_columns_gram_double_double(signals, columns));
   }
   DoubleDoubleCholeskyResult chol = double_double_cholesky(gram);
-  if (!chol.positive_definite || !(chol.smallest_pivot_ratio >= 1e-14)) return std::nullopt;
+  if (!chol.positive_definite || !(chol.smallest_pivot_ratio >= kRankDeficientPivotRatio)) return std::nullopt;
   return std::move(chol.R);
 }
 

@@ -126,6 +126,9 @@ inline DoubleDouble sqrt(const DoubleDouble& x) {
 /// (hi alone is the matrix rounded to double).
 struct DoubleDoubleMatrix {
   Eigen::MatrixXd hi, lo;
+  static DoubleDoubleMatrix zero(Eigen::Index rows, Eigen::Index cols) {
+    return {Eigen::MatrixXd::Zero(rows, cols), Eigen::MatrixXd::Zero(rows, cols)};
+  }
   DoubleDouble operator()(Eigen::Index r, Eigen::Index c) const { return {hi(r, c), lo(r, c)}; }
   void set(Eigen::Index r, Eigen::Index c, const DoubleDouble& v) {
     hi(r, c) = v.hi;

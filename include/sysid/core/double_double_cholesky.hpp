@@ -31,6 +31,12 @@
 
 namespace sysid {
 
+/// A pivot ratio below this proves the matrix behind G rank deficient to double
+/// precision (ratio >= sigma_min / sigma_max, so cond > 1e14): there the
+/// double-double factor is no better defined than a Householder R, and the
+/// callers (block-Hankel compression, PEM Jacobian) let the QR decide.
+inline constexpr double kRankDeficientPivotRatio = 1e-14;
+
 struct DoubleDoubleCholeskyResult {
   Eigen::MatrixXd R;               ///< k x k upper triangular, rounded to double (valid only if positive_definite)
   bool positive_definite = false;  ///< every pivot was positive

@@ -32,7 +32,7 @@
 ///    grows like j (m+l)^2 i rather than j k^2. This is the route band-limited
 ///    data take: a chirp or multisine that leaves part of the Nyquist band
 ///    empty makes H ill-conditioned (cond 5e11 on the Par2 log decimated by 5,
-///    where this route is 5x faster than qr and its R 1000x closer to a
+///    where this route is 5x faster than qr and its R 800x closer to a
 ///    long-double reference).
 ///  automatic: cholesky when it succeeds with an estimated cond(G) within
 ///  `max_gram_condition`, else cholesky_double_double when G is positive
@@ -81,7 +81,7 @@ struct BlockHankelOptions {
   /// (the sine of the angle between row j of H and the rows before it) is at
   /// least this: a smaller one proves cond(H) > 1 / ratio, i.e. data rank
   /// deficient to double precision, which the qr route handles as before.
-  double min_pivot_ratio = 1e-14;
+  double min_pivot_ratio = kRankDeficientPivotRatio;
 };
 
 /// Row ranges of the partitions of H, in rows of H (= columns of R).
@@ -208,7 +208,7 @@ inline BlockHankelCompression compress_block_hankel(const IoData& data, const Bl
     }
   }
   if (options.route == HankelRoute::automatic || options.route == HankelRoute::cholesky_double_double) {
-    DoubleDoubleMatrix gram{Eigen::MatrixXd::Zero(k, k), Eigen::MatrixXd::Zero(k, k)};
+    DoubleDoubleMatrix gram = DoubleDoubleMatrix::zero(k, k);
     for (const auto& e : data.experiments) detail::add_gram_double_double(e, out.layout, gram);
     DoubleDoubleCholeskyResult chol = double_double_cholesky(gram);
     const bool forced = options.route == HankelRoute::cholesky_double_double;

@@ -97,7 +97,7 @@ DoubleDoubleMatrix lagged_sums_double_double(const MX& x_in, const MY& y_in, Eig
                                              bool symmetric) {
   const Eigen::MatrixXd x = x_in, y = y_in;  // contiguous columns for the kernel
   const Eigen::Index mx = x.cols(), my = y.cols();
-  DoubleDoubleMatrix s{Eigen::MatrixXd::Zero(i2 * mx, i2 * my), Eigen::MatrixXd::Zero(i2 * mx, i2 * my)};
+  DoubleDoubleMatrix s = DoubleDoubleMatrix::zero(i2 * mx, i2 * my);
   std::vector<DoubleDouble> lagged(static_cast<std::size_t>(i2));
   for (Eigen::Index a = 0; a < mx; ++a)
     for (Eigen::Index b = 0; b < my; ++b) {
@@ -175,7 +175,7 @@ inline DoubleDoubleMatrix shifted_columns_gram_double_double(const std::vector<E
       if (hi[a] < 0 || hi[b] < 0) continue;
       const Eigen::VectorXd &x = padded[a], &y = padded[b];
       DoubleDoubleMatrix& s = table[a * count + b];
-      s = {Eigen::MatrixXd::Zero(hi[a] + 1, hi[b] + 1), Eigen::MatrixXd::Zero(hi[a] + 1, hi[b] + 1)};
+      s = DoubleDoubleMatrix::zero(hi[a] + 1, hi[b] + 1);
       // Diagonals i - j = L >= 0 start at S(L, 0); those with j - i = L > 0 at S(0, L).
       const Eigen::Index below = hi[a] - lo[b], above = hi[b] - lo[a];
       if (below >= 0) {
