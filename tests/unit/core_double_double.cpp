@@ -36,6 +36,37 @@ DoubleDouble random_double_double(std::mt19937_64& rng) {
   return two_sum(hi, lo);
 }
 
+/// G = H^T H summed in binary128 and split into double-double; gq holds the
+/// binary128 entries (column-major) for residual checks.
+DoubleDoubleMatrix gram_in_binary128(const Eigen::MatrixXd& H, std::vector<quad>& gq) {
+  const Eigen::Index k = H.cols();
+  DoubleDoubleMatrix G{Eigen::MatrixXd(k, k), Eigen::MatrixXd(k, k)};
+  gq.assign(static_cast<std::size_t>(k * k), 0);
+  for (Eigen::Index i = 0; i < k; ++i)
+    for (Eigen::Index j = 0; j < k; ++j) {
+      quad s = 0;
+      for (Eigen::Index r = 0; r < H.rows(); ++r) s += static_cast<quad>(H(r, i)) * static_cast<quad>(H(r, j));
+      gq[static_cast<std::size_t>(j * k + i)] = s;
+      const double hi = static_cast<double>(s);
+      G.set(i, j, {hi, static_cast<double>(s - static_cast<quad>(hi))});
+    }
+  return G;
+}
+
+/// max |R^T R - G| over the entries, in binary128.
+double gram_residual(const Eigen::MatrixXd& R, const std::vector<quad>& gq) {
+  const Eigen::Index k = R.cols();
+  double worst = 0;
+  for (Eigen::Index i = 0; i < k; ++i)
+    for (Eigen::Index j = 0; j < k; ++j) {
+      quad s = 0;
+      for (Eigen::Index r = 0; r < k; ++r) s += static_cast<quad>(R(r, i)) * static_cast<quad>(R(r, j));
+      const quad d = s - gq[static_cast<std::size_t>(j * k + i)];
+      worst = std::max(worst, static_cast<double>(d < 0 ? -d : d));
+    }
+  return worst;
+}
+
 }  // namespace
 
 TEST(DoubleDouble, ErrorFreeTransformationsAreExact) {
@@ -90,16 +121,8 @@ TEST(DoubleDoubleCholesky, FactorsAGramMatrixThatDoubleCannot) {
   for (Eigen::Index i = 0; i < k; ++i) sv(i) = std::pow(10.0, -11.0 * static_cast<double>(i) / static_cast<double>(k - 1));
   const Eigen::MatrixXd H = U * sv.asDiagonal() * V.transpose();
   // G = H^T H exactly enough: every entry summed in binary128, then split.
-  DoubleDoubleMatrix G{Eigen::MatrixXd(k, k), Eigen::MatrixXd(k, k)};
-  std::vector<quad> gq(static_cast<std::size_t>(k * k));
-  for (Eigen::Index i = 0; i < k; ++i)
-    for (Eigen::Index j = 0; j < k; ++j) {
-      quad s = 0;
-      for (Eigen::Index r = 0; r < rows; ++r) s += static_cast<quad>(H(r, i)) * static_cast<quad>(H(r, j));
-      gq[static_cast<std::size_t>(j * k + i)] = s;
-      const double hi = static_cast<double>(s);
-      G.set(i, j, {hi, static_cast<double>(s - static_cast<quad>(hi))});
-    }
+  std::vector<quad> gq;
+  const DoubleDoubleMatrix G = gram_in_binary128(H, gq);
   const DoubleDoubleCholeskyResult chol = double_double_cholesky(G);
   ASSERT_TRUE(chol.positive_definite);
   EXPECT_TRUE(chol.R.isUpperTriangular());
@@ -107,14 +130,7 @@ TEST(DoubleDoubleCholesky, FactorsAGramMatrixThatDoubleCannot) {
   EXPECT_LE(chol.smallest_pivot_ratio, 1.0);
   // Residual of R^T R against G, relative to ||G|| ~ 1, in binary128. R is
   // rounded to double, so the bound is that of a double R: ~u ||G||.
-  double worst = 0;
-  for (Eigen::Index i = 0; i < k; ++i)
-    for (Eigen::Index j = 0; j < k; ++j) {
-      quad s = 0;
-      for (Eigen::Index r = 0; r < k; ++r) s += static_cast<quad>(chol.R(r, i)) * static_cast<quad>(chol.R(r, j));
-      const quad d = s - gq[static_cast<std::size_t>(j * k + i)];
-      worst = std::max(worst, static_cast<double>(d < 0 ? -d : d));
-    }
+  const double worst = gram_residual(chol.R, gq);
   EXPECT_LT(worst, 1e-15);
   // The small end: R's singular values are H's (to ~u of each, far better than
   // the u ||H|| of any double factorisation), while double's LLT cannot deliver them.
@@ -138,6 +154,64 @@ TEST(DoubleDoubleCholesky, ReportsASingularMatrix) {
   EXPECT_TRUE(!chol.positive_definite || chol.smallest_pivot_ratio < 1e-14) << chol.smallest_pivot_ratio;
   const DoubleDoubleCholeskyResult negative = double_double_cholesky({-Eigen::MatrixXd::Identity(3, 3), Eigen::MatrixXd::Zero(3, 3)});
   EXPECT_FALSE(negative.positive_definite);
+}
+
+TEST(DoubleDoubleCholesky, SemidefiniteModeZeroesAPivotTheRoundingOfGExplains) {
+  // Column 3 of H is a combination of columns 0 and 1 with large coefficients
+  // (rounded to double: dependent to ~1e-16 of its norm), as near common factors
+  // make a polynomial model's Jacobian. Its Schur complement pivot is at the
+  // rounding level, of either sign.
+  const Eigen::MatrixXd base = test::white_noise(80, 5, 11);
+  Eigen::MatrixXd H = base;
+  H.col(3) = 1e3 * base.col(0) - 2e3 * base.col(1);
+  std::vector<quad> gq;
+  const DoubleDoubleMatrix G = gram_in_binary128(H, gq);
+  const DoubleDoubleCholeskyResult plain = double_double_cholesky(G);
+  EXPECT_TRUE(!plain.factorised || plain.smallest_pivot_ratio < kRankDeficientPivotRatio) << plain.smallest_pivot_ratio;
+
+  DoubleDoubleCholeskyOptions semidefinite;
+  semidefinite.gram_relative_error = 1e-28;
+  const DoubleDoubleCholeskyResult chol = double_double_cholesky(G, semidefinite);
+  ASSERT_TRUE(chol.factorised);
+  EXPECT_FALSE(chol.positive_definite);
+  ASSERT_EQ(chol.zero_pivots, std::vector<Eigen::Index>{3});
+  EXPECT_LE(chol.largest_zeroed_pivot_to_bound, 1.0);
+  EXPECT_TRUE(chol.R.isUpperTriangular());
+  EXPECT_EQ(chol.R.row(3).cwiseAbs().maxCoeff(), 0.0);
+  // R^T R is G (relative to its largest entry) and R's column norms are H's.
+  EXPECT_LT(gram_residual(chol.R, gq) / G.hi.cwiseAbs().maxCoeff(), 1e-15);
+  for (Eigen::Index j = 0; j < 5; ++j)
+    EXPECT_NEAR(chol.R.col(j).norm() / H.col(j).norm(), 1.0, 1e-14) << "column " << j;
+  // The other columns factorise as if column 3 were absent: R of H without it.
+  Eigen::MatrixXd reduced(80, 4);
+  reduced << base.leftCols(3), base.col(4);
+  std::vector<quad> gr;
+  const DoubleDoubleCholeskyResult without = double_double_cholesky(gram_in_binary128(reduced, gr));
+  ASSERT_TRUE(without.positive_definite);
+  const std::vector<Eigen::Index> kept{0, 1, 2, 4};
+  for (std::size_t a = 0; a < kept.size(); ++a)
+    for (std::size_t b = a; b < kept.size(); ++b)
+      EXPECT_NEAR(chol.R(kept[a], kept[b]), without.R(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)), 1e-12)
+          << a << ", " << b;
+}
+
+TEST(DoubleDoubleCholesky, SemidefiniteModeStillRejectsAnIndefiniteMatrix) {
+  // [[1, 2], [2, 1]] has the pivot 1 - 4 = -3: no rounding of a Gram matrix explains it.
+  Eigen::MatrixXd g(2, 2);
+  g << 1, 2, 2, 1;
+  DoubleDoubleCholeskyOptions semidefinite;
+  semidefinite.gram_relative_error = 1e-28;
+  const DoubleDoubleCholeskyResult chol = double_double_cholesky({g, Eigen::MatrixXd::Zero(2, 2)}, semidefinite);
+  EXPECT_FALSE(chol.factorised);
+  EXPECT_FALSE(chol.positive_definite);
+  // A positive definite matrix factorises exactly as without the mode.
+  const Eigen::MatrixXd h = test::white_noise(30, 4, 5);
+  std::vector<quad> gq;
+  const DoubleDoubleMatrix G = gram_in_binary128(h, gq);
+  const DoubleDoubleCholeskyResult definite = double_double_cholesky(G, semidefinite);
+  ASSERT_TRUE(definite.positive_definite);
+  EXPECT_TRUE(definite.zero_pivots.empty());
+  EXPECT_EQ(definite.R, double_double_cholesky(G).R);
 }
 
 }  // namespace test_unit_core_double_double

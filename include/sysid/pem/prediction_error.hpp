@@ -119,7 +119,7 @@ struct PemResult {
   double initial_cost = 0, final_cost = 0;  ///< 1/2 sum eps^2 in scaled units
   std::vector<double> cost_history;         ///< accepted costs, scaled units
   Eigen::VectorXd input_offset, output_offset;
-  double condition = 0;  ///< of the column-scaled Jacobian at the solution
+  double condition = 0;  ///< of the column-scaled Jacobian at the solution (infinite: rank deficient to double precision)
   std::string structure;  ///< "armax", "arma", "oe", ... (structure_name)
   /// ARMAX/ARMA: the start the returned model was iterated from ("hannan-rissanen" or "output-error").
   std::string start;

@@ -183,7 +183,10 @@ inline DoubleDoubleMatrix shifted_columns_gram_double_double(const std::vector<E
         correlate_double_double(x.data(), y.data(), n, below + 1, base.data());
         for (Eigen::Index lag = 0; lag <= std::min(below, hi[a]); ++lag) s.set(lag, 0, base[static_cast<std::size_t>(lag)]);
       }
-      if (above >= 1) {
+      if (a == b) {
+        // S(0, L) = S(L, 0) for a signal with itself: no second correlation.
+        for (Eigen::Index lag = 1; lag <= std::min(below, hi[a]); ++lag) s.set(0, lag, s(lag, 0));
+      } else if (above >= 1) {
         base.assign(static_cast<std::size_t>(above + 1), DoubleDouble());
         correlate_double_double(y.data(), x.data(), n, above + 1, base.data());
         for (Eigen::Index lag = 1; lag <= std::min(above, hi[b]); ++lag) s.set(0, lag, base[static_cast<std::size_t>(lag)]);
