@@ -768,7 +768,10 @@ PemResult pem(IoData data, const PemOptions& options) {
   const double sigma2 = 2.0 * cost / std::max(1.0, total - static_cast<double>(p));
   const Eigen::MatrixXd r_inv = r11.completeOrthogonalDecomposition().pseudoInverse();
   Eigen::MatrixXd covariance = sigma2 * r_inv * r_inv.transpose();
-  if (!std::isfinite(res.condition)) {
+  // Above ~1/u the SVD of a double R11 no longer measures the condition: the
+  // semidefinite Gram factor's zero rows make it infinite, its rounding-level
+  // pivots anything from 1e16 up.
+  if (!(res.condition < 1e16)) {
     res.warnings.push_back("pem: the Jacobian is rank deficient to double precision at the solution: some parameters "
                            "are not determined by the data (orders too high, or common factors)");
   } else if (res.condition > 1e10) {

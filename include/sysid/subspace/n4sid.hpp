@@ -143,6 +143,9 @@ struct N4sidResult {
   double excited_band_low_hz = 0, excited_band_high_hz = 0;  ///< where the inputs carry power
   double out_of_band_gain_ratio = 0;  ///< max gain above the excited band / max gain inside it
   Eigen::Index bdx_samples_used = 0;
+  /// Of those, the samples where C A^t had decayed below 1e-17 of its peak: their
+  /// x0 regressors were taken as zero and a narrower QR took them (cheaper; same R).
+  Eigen::Index bdx_samples_without_initial_response = 0;
   int decimation = 1;  ///< factor of the grid the subspace step ran on (1 = original rate)
   bool band_limited = false;  ///< model includes the band-limiting Butterworth filter at its inputs (order + m * filter order)
   std::vector<std::string> warnings;
