@@ -128,7 +128,7 @@ inline std::pair<Eigen::MatrixXd, Eigen::MatrixXd> sqrt_and_inverse_sqrt(const E
 ///
 /// For a stable A the x0 regressors C A^t decay: once every entry of Lambda(t)
 /// is below kNegligibleInitialResponse of its largest value so far (after about
-/// 11 000 of the 40 000 samples of the Par2 log), the row's x0 entries are taken
+/// 10 900 of the 40 000 samples of the Par2 log), the row's x0 entries are taken
 /// as zero, a perturbation of ~1e-17 of their column's scale, below the QR's own
 /// rounding (u = 1.1e-16). Those rows go to a second streaming QR over the B, D
 /// and y columns only, whose triangle is merged into the first at the end: the

@@ -69,7 +69,7 @@ inline Eigen::MatrixX2d steady_state_unit_states(const SecondOrderSections& f) {
 /// than section by section through every sample: each section's recursion is a
 /// chain of dependent multiply-adds, so one section alone runs at the latency of
 /// that chain; interleaved, the chains of the sections overlap in the pipeline
-/// (1.3 ms -> 0.4 ms for the 4-section decimation filter of the Par2 log).
+/// (the decimation filtfilt of the Par2 log: about 1.3 ms -> 0.8 ms, the same output bit for bit).
 inline void cascade_inplace(const std::vector<Biquad>& q, double* x, Eigen::Index n, double* s1, double* s2) {
   const std::size_t sections = q.size();
   for (Eigen::Index i = 0; i < n; ++i) {
