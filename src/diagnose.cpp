@@ -3,17 +3,13 @@
 #include "sysid/diagnose/diagnose.hpp"
 
 #include <algorithm>
-#include <atomic>
-#include <exception>
-#include <functional>
 #include <memory>
-#include <mutex>
-#include <thread>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 
 #include "sysid/core/identification_warnings.hpp"
+#include "sysid/core/parallel_for.hpp"
 #include "sysid/core/poles_zeros.hpp"
 #include "sysid/spectral/confidence.hpp"
 #include "sysid/validate/compare.hpp"
@@ -60,30 +56,6 @@ double improvement_z(const Eigen::MatrixXd& y, const Eigen::MatrixXd& before, co
   }
   if (!(variance > 0)) return gain > 0 ? std::numeric_limits<double>::infinity() : 0.0;
   return gain / std::sqrt(variance);
-}
-
-/// Runs body(0..count-1) on up to hardware_concurrency threads; the first
-/// exception thrown by any call is rethrown here after all threads joined.
-void parallel_for(std::size_t count, const std::function<void(std::size_t)>& body) {
-  const std::size_t workers = std::min<std::size_t>(count, std::max(1u, std::thread::hardware_concurrency()));
-  std::atomic<std::size_t> next{0};
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
-  auto work = [&] {
-    for (std::size_t k = next++; k < count; k = next++) {
-      try {
-        body(k);
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(failure_mutex);
-        if (!failure) failure = std::current_exception();
-      }
-    }
-  };
-  std::vector<std::thread> threads;
-  for (std::size_t t = 1; t < workers; ++t) threads.emplace_back(work);
-  work();
-  for (auto& t : threads) t.join();
-  if (failure) std::rethrow_exception(failure);
 }
 
 std::string fixed(double v, int digits) {

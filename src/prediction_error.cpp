@@ -1,6 +1,7 @@
 // Implementation of pem/prediction_error.hpp (method and references in the header).
 #include <sysid/core/detail/lagged_sums.hpp>
 #include <sysid/core/double_double_cholesky.hpp>
+#include <sysid/core/parallel_for.hpp>
 #include <sysid/core/errors.hpp>
 #include <sysid/core/streaming_qr.hpp>
 #include <sysid/core/transfer_function.hpp>
@@ -708,29 +709,39 @@ PemResult pem(IoData data, const PemOptions& options) {
                      : std::vector<PemStart>{PemStart::hannan_rissanen};
     // Several starts run a few iterations each; only the lower cost goes on
     // (the others are usually far off, and a full run from each would multiply the time).
+    // The starts are independent, so they run on the machine's cores; the choice
+    // is made afterwards in their order, as a sequential loop would make it.
     const int trial = starts.size() > 1 ? std::min(options.max_iterations, 10) : options.max_iterations;
-    const PolynomialModel empty = model;
-    bool have_run = false;
-    for (PemStart start : starts) {
-      PolynomialModel candidate = empty;
+    struct StartOutcome {
+      PolynomialModel model;
       std::string name;
+      std::optional<LmRun> run;
+    };
+    std::vector<StartOutcome> outcomes(starts.size(), StartOutcome{model, "", std::nullopt});
+    parallel_for(starts.size(), [&](std::size_t k) {
+      StartOutcome& o = outcomes[k];
+      const PemStart start = starts[k];
       if (start == PemStart::hannan_rissanen) {
-        hannan_rissanen(candidate, records, hannan_rissanen_order(options, total));
-        name = "hannan-rissanen";
-      } else if (start == PemStart::subspace && armax_subspace_start(candidate, records, options)) {
-        name = "subspace";
+        hannan_rissanen(o.model, records, hannan_rissanen_order(options, total));
+        o.name = "hannan-rissanen";
+      } else if (start == PemStart::subspace && armax_subspace_start(o.model, records, options)) {
+        o.name = "subspace";
       } else if ((start == PemStart::output_error || options.start == PemStart::automatic) &&
-                 armax_output_error_start(candidate, records, options)) {
+                 armax_output_error_start(o.model, records, options)) {
         // Under `automatic` the output-error start stands in for a failed subspace one.
-        name = "output-error";
+        o.name = "output-error";
       } else {
-        continue;
+        return;
       }
-      LmRun attempt = levenberg_marquardt(candidate, records, p, options, trial);
-      if (!have_run || attempt.final_cost < run.final_cost) {
-        run = std::move(attempt);
-        model = std::move(candidate);
-        res.start = name;
+      o.run = levenberg_marquardt(o.model, records, p, options, trial);
+    });
+    bool have_run = false;
+    for (StartOutcome& o : outcomes) {
+      if (!o.run) continue;
+      if (!have_run || o.run->final_cost < run.final_cost) {
+        run = std::move(*o.run);
+        model = std::move(o.model);
+        res.start = o.name;
         have_run = true;
       }
     }
