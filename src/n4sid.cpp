@@ -175,6 +175,7 @@ inline BdxEstimate estimate_bdx(const Eigen::MatrixXd& A, const Eigen::MatrixXd&
       const Eigen::Index count = std::min(block, samples - start);
       Eigen::Index full = 0, reduced = 0;  // rows filled in each buffer
       rows.topRows(count * l).setZero();
+      reduced_rows.topRows(count * l).setZero();
       for (Eigen::Index k = 0; k < count; ++k) {
         const Eigen::Index t = start + k;
         const double initial_response = state.rightCols(l).cwiseAbs().maxCoeff();
@@ -183,10 +184,8 @@ inline BdxEstimate estimate_bdx(const Eigen::MatrixXd& A, const Eigen::MatrixXd&
         auto r_t = negligible ? reduced_rows.middleRows(reduced * l, l) : rows.middleRows(full * l, l);
         (negligible ? reduced : full) += 1;
         for (Eigen::Index q = 0; q < m; ++q) r_t.middleCols(q * n, n) = state.middleCols(q * l, l).transpose();
-        for (Eigen::Index q = 0; q < m; ++q) {
-          r_t.middleCols(n * m + q * l, l).setZero();
+        for (Eigen::Index q = 0; q < m; ++q)
           for (Eigen::Index r = 0; r < l; ++r) r_t(r, n * m + q * l + r) = ex.u(t, q);
-        }
         if (!negligible) r_t.middleCols(input_columns + e * n, n) = state.rightCols(l).transpose();
         r_t.col(r_t.cols() - 1) = ex.y.row(t).transpose();
         next.noalias() = At.lazyProduct(state);

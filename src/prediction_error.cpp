@@ -206,7 +206,7 @@ double cost_of(const PolynomialModel& model, const std::vector<ScaledRecord>& re
 /// that row of R zero where a Householder R would hold rounding noise of the same
 /// size; the damping alone sets the step along it. Before, those factorisations
 /// went to the QR: a third of them on the Par2 ARMAX(32,32,26), whose time then
-/// fell from 2.3 to 1.2 s. Empty when a pivot is negative beyond the errors
+/// fell from 2.3 to 1.1 s. Empty when a pivot is negative beyond the errors
 /// of G or a record is shorter than the lags: the QR decides.
 std::optional<Eigen::MatrixXd> gram_jacobian_factor(const std::vector<FilteredRegressors>& regressors, Eigen::Index p) {
   DoubleDoubleMatrix gram = DoubleDoubleMatrix::zero(p + 1, p + 1);
@@ -221,7 +221,7 @@ std::optional<Eigen::MatrixXd> gram_jacobian_factor(const std::vector<FilteredRe
     add_block(gram, 0, 0, detail::shifted_columns_gram_double_double(signals, columns));
   }
   DoubleDoubleCholeskyOptions semidefinite;
-  semidefinite.gram_relative_error = 1e-28;
+  semidefinite.gram_relative_error = kDoubleDoubleGramRelativeError;
   DoubleDoubleCholeskyResult chol = double_double_cholesky(gram, semidefinite);
   if (!chol.factorised) return std::nullopt;
   return std::move(chol.R);

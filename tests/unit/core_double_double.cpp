@@ -170,7 +170,7 @@ TEST(DoubleDoubleCholesky, SemidefiniteModeZeroesAPivotTheRoundingOfGExplains) {
   EXPECT_TRUE(!plain.factorised || plain.smallest_pivot_ratio < kRankDeficientPivotRatio) << plain.smallest_pivot_ratio;
 
   DoubleDoubleCholeskyOptions semidefinite;
-  semidefinite.gram_relative_error = 1e-28;
+  semidefinite.gram_relative_error = kDoubleDoubleGramRelativeError;
   const DoubleDoubleCholeskyResult chol = double_double_cholesky(G, semidefinite);
   ASSERT_TRUE(chol.factorised);
   EXPECT_FALSE(chol.positive_definite);
@@ -200,7 +200,7 @@ TEST(DoubleDoubleCholesky, SemidefiniteModeStillRejectsAnIndefiniteMatrix) {
   Eigen::MatrixXd g(2, 2);
   g << 1, 2, 2, 1;
   DoubleDoubleCholeskyOptions semidefinite;
-  semidefinite.gram_relative_error = 1e-28;
+  semidefinite.gram_relative_error = kDoubleDoubleGramRelativeError;
   const DoubleDoubleCholeskyResult chol = double_double_cholesky({g, Eigen::MatrixXd::Zero(2, 2)}, semidefinite);
   EXPECT_FALSE(chol.factorised);
   EXPECT_FALSE(chol.positive_definite);

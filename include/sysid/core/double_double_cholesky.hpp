@@ -64,11 +64,14 @@ namespace sysid {
 /// over-parametrised models make this the rule, factorises in semidefinite mode.
 inline constexpr double kRankDeficientPivotRatio = 1e-14;
 
+/// Relative accuracy of the double-double Gram sums of core/detail/lagged_sums.hpp,
+/// |dG_ik| <= eps sqrt(G_ii G_kk): ~3e-30 measured, with room for the recursions.
+inline constexpr double kDoubleDoubleGramRelativeError = 1e-28;
+
 struct DoubleDoubleCholeskyOptions {
   /// 0: fail at the first pivot that is not positive. > 0: semidefinite mode
   /// (file comment), with eps the relative accuracy of G's entries,
-  /// |dG_ik| <= eps sqrt(G_ii G_kk): 1e-28 covers the double-double Gram sums of
-  /// core/detail/lagged_sums.hpp (~3e-30 measured) with room for the recursions.
+  /// |dG_ik| <= eps sqrt(G_ii G_kk) (kDoubleDoubleGramRelativeError for those sums).
   double gram_relative_error = 0;
 };
 
@@ -131,7 +134,8 @@ inline DoubleDoubleCholeskyResult double_double_cholesky(const DoubleDoubleMatri
                                  : detail::pivot_error_bound(out.R, g, j, options.gram_relative_error);
         if (std::abs(s.hi) <= bound) {
           out.zero_pivots.push_back(j);
-          out.largest_zeroed_pivot_to_bound = std::max(out.largest_zeroed_pivot_to_bound, std::abs(s.hi) / bound);
+          if (bound > 0)  // a zero column (G_jj = 0) has bound and pivot 0
+            out.largest_zeroed_pivot_to_bound = std::max(out.largest_zeroed_pivot_to_bound, std::abs(s.hi) / bound);
           out.smallest_pivot_ratio = 0.0;
           at(j, j) = DoubleDouble();
           continue;

@@ -92,8 +92,7 @@ inline std::vector<Biquad> biquads(const SecondOrderSections& f) {
 
 /// Runs the cascade over x in place, starting every section from zi * x[0].
 inline void cascade_from_steady_state(const std::vector<Biquad>& q, const Eigen::MatrixX2d& zi, Eigen::VectorXd& x) {
-  const Eigen::VectorXd s1_start = zi.col(0) * x(0), s2_start = zi.col(1) * x(0);
-  std::vector<double> s1(s1_start.data(), s1_start.data() + s1_start.size()), s2(s2_start.data(), s2_start.data() + s2_start.size());
+  Eigen::VectorXd s1 = zi.col(0) * x(0), s2 = zi.col(1) * x(0);
   cascade_inplace(q, x.data(), x.size(), s1.data(), s2.data());
 }
 
@@ -111,7 +110,7 @@ Eigen::MatrixXd sos_filter(const SecondOrderSections& filter, const Eigen::Matri
   Eigen::MatrixXd y = x;  // column-major: each column is contiguous
   const std::vector<detail::Biquad> q = detail::biquads(filter);
   for (Eigen::Index c = 0; c < y.cols(); ++c) {
-    std::vector<double> s1(q.size(), 0.0), s2(q.size(), 0.0);
+    Eigen::VectorXd s1 = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(q.size())), s2 = s1;
     detail::cascade_inplace(q, y.col(c).data(), y.rows(), s1.data(), s2.data());
   }
   return y;
