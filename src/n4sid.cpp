@@ -10,14 +10,15 @@
 #include <sysid/core/frequency_response.hpp>
 #include <sysid/core/interconnect.hpp>
 #include <sysid/core/io_data.hpp>
+#include <sysid/core/parallel_for.hpp>
 #include <sysid/core/simulate.hpp>
 #include <sysid/core/state_space.hpp>
-#include <sysid/core/streaming_qr.hpp>
 #include <sysid/hankel/block_hankel.hpp>
 #include <sysid/signal/butterworth.hpp>
 #include <sysid/signal/resample.hpp>
 #include <sysid/signal/sos_filter.hpp>
 #include <sysid/spectral/welch.hpp>
+#include <sysid/subspace/bdx_least_squares.hpp>
 #include <sysid/subspace/innovation_model.hpp>
 #include <sysid/validate/fit.hpp>
 
@@ -26,6 +27,8 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 namespace sysid {
@@ -116,115 +119,6 @@ inline std::pair<Eigen::MatrixXd, Eigen::MatrixXd> sqrt_and_inverse_sqrt(const E
   for (Eigen::Index k = 0; k < ev.size(); ++k) inv_root(k) = ev(k) > rel_tol * top ? 1.0 / root(k) : 0.0;
   const Eigen::MatrixXd& v = eig.eigenvectors();
   return {v * root.asDiagonal() * v.transpose(), v * inv_root.asDiagonal() * v.transpose()};
-}
-
-/// B, D and one x0 per experiment minimising the simulation error with A, C
-/// fixed. The output is linear in them:
-///   y(t) = C A^t x0 + sum_{tau<t} C A^{t-1-tau} B u(tau) + D u(t).
-/// The regressor of B(p,q) at output r is Psi_q(t)(r,p) with the l x n recursion
-/// Psi_q(t+1) = Psi_q(t) A + u_q(t) C (cost l n^2 per input and step instead of
-/// n^3 for the state-side recursion); that of x0 is Lambda(t) = C A^t.
-/// Solved by a streaming QR of the stacked regression (never normal equations).
-///
-/// For a stable A the x0 regressors C A^t decay: once every entry of Lambda(t)
-/// is below kNegligibleInitialResponse of its largest value so far (after about
-/// 10 900 of the 40 000 samples of the Par2 log), the row's x0 entries are taken
-/// as zero, a perturbation of ~1e-17 of their column's scale, below the QR's own
-/// rounding (u = 1.1e-16). Those rows go to a second streaming QR over the B, D
-/// and y columns only, whose triangle is merged into the first at the end: the
-/// rows [R_full; R_reduced with zero x0 columns] have the same R factor as the
-/// whole regression. It halves the QR's work on Par2 (width 12 instead of 22 for
-/// three quarters of the rows).
-struct BdxEstimate {
-  Eigen::MatrixXd B, D;
-  std::vector<Eigen::VectorXd> x0;
-  Eigen::Index samples_used = 0;
-  Eigen::Index rows_without_initial_response = 0;  ///< samples whose x0 regressors were negligible
-  double condition = 0;
-};
-
-inline constexpr double kNegligibleInitialResponse = 1e-17;
-
-inline BdxEstimate estimate_bdx(const Eigen::MatrixXd& A, const Eigen::MatrixXd& C, const IoData& data, Eigen::Index max_samples) {
-  const Eigen::Index n = A.rows(), l = C.rows(), m = data.inputs();
-  const Eigen::Index experiments = static_cast<Eigen::Index>(data.experiments.size());
-  const Eigen::Index input_columns = n * m + l * m;  // B then D: the columns every row has
-  const Eigen::Index p = input_columns + n * experiments;
-  StreamingQR qr(p + 1), reduced_qr(input_columns + 1);
-  BdxEstimate out;
-  // Rows of `block` samples are formed together and handed to the QR at once;
-  // the recursions reuse their buffers (no allocation per sample).
-  const Eigen::Index block = 256;
-  Eigen::MatrixXd rows(block * l, p + 1), reduced_rows(block * l, input_columns + 1);
-  // The recursions of every input and of Lambda advance together, one small
-  // product per sample, on the transposed state: columns q l .. q l + l - 1 of
-  // `state` hold Psi_q^T, the last l columns Lambda^T, so state <- A^T state
-  // runs down contiguous columns of A^T (vectorised). lazyProduct keeps this
-  // n x n times n x (m+1) l product inline: the general GEMV/GEMM dispatch
-  // costs more than the product itself at these sizes.
-  const Eigen::MatrixXd At = A.transpose(), Ct = C.transpose();
-  Eigen::MatrixXd state(n, (m + 1) * l), next(n, (m + 1) * l);
-  for (Eigen::Index e = 0; e < experiments; ++e) {
-    const Experiment& ex = data.experiments[static_cast<std::size_t>(e)];
-    const Eigen::Index samples = std::min(ex.samples(), max_samples);
-    out.samples_used += samples;
-    state.leftCols(m * l).setZero();
-    state.rightCols(l) = Ct;
-    double initial_response_peak = 0;
-    for (Eigen::Index start = 0; start < samples; start += block) {
-      const Eigen::Index count = std::min(block, samples - start);
-      Eigen::Index full = 0, reduced = 0;  // rows filled in each buffer
-      rows.topRows(count * l).setZero();
-      reduced_rows.topRows(count * l).setZero();
-      for (Eigen::Index k = 0; k < count; ++k) {
-        const Eigen::Index t = start + k;
-        const double initial_response = state.rightCols(l).cwiseAbs().maxCoeff();
-        initial_response_peak = std::max(initial_response_peak, initial_response);
-        const bool negligible = initial_response <= kNegligibleInitialResponse * initial_response_peak;
-        auto r_t = negligible ? reduced_rows.middleRows(reduced * l, l) : rows.middleRows(full * l, l);
-        (negligible ? reduced : full) += 1;
-        for (Eigen::Index q = 0; q < m; ++q) r_t.middleCols(q * n, n) = state.middleCols(q * l, l).transpose();
-        for (Eigen::Index q = 0; q < m; ++q)
-          for (Eigen::Index r = 0; r < l; ++r) r_t(r, n * m + q * l + r) = ex.u(t, q);
-        if (!negligible) r_t.middleCols(input_columns + e * n, n) = state.rightCols(l).transpose();
-        r_t.col(r_t.cols() - 1) = ex.y.row(t).transpose();
-        next.noalias() = At.lazyProduct(state);
-        for (Eigen::Index q = 0; q < m; ++q) next.middleCols(q * l, l) += ex.u(t, q) * Ct;
-        state.swap(next);
-      }
-      if (full > 0) qr.add_rows(rows.topRows(full * l));
-      if (reduced > 0) reduced_qr.add_rows(reduced_rows.topRows(reduced * l));
-      out.rows_without_initial_response += reduced;
-    }
-  }
-  if (out.rows_without_initial_response > 0) {
-    // Merge: the reduced triangle's rows, with zeros in every x0 column.
-    const Eigen::MatrixXd r_reduced = reduced_qr.r();
-    Eigen::MatrixXd merged = Eigen::MatrixXd::Zero(r_reduced.rows(), p + 1);
-    merged.leftCols(input_columns) = r_reduced.leftCols(input_columns);
-    merged.col(p) = r_reduced.col(input_columns);
-    qr.add_rows(merged);
-  }
-  const Eigen::MatrixXd r = qr.r();
-  // Column equilibration before the rank decision: the regressors' scales can
-  // differ by many decades (C A^t and the B regressors grow like rho(A)^t when
-  // A is unstable: 1e21 over 600 samples at rho = 1.083), and a rank threshold
-  // relative to the largest pivot then discards every other column, B = D = 0.
-  // The column norms of R are those of the regression (Q is orthogonal), and
-  // R S is the R factor of M S, so scaling after the QR is scaling the data.
-  Eigen::VectorXd column_norm = r.topLeftCorner(p, p).colwise().norm().transpose();
-  for (double& c : column_norm)
-    if (!(c > 0.0)) c = 1.0;  // an all-zero regressor (input constant zero) stays zero
-  const Eigen::MatrixXd r11 = r.topLeftCorner(p, p) * column_norm.cwiseInverse().asDiagonal();
-  const Eigen::VectorXd d = r11.diagonal().cwiseAbs();
-  out.condition = d.minCoeff() > 0 ? d.maxCoeff() / d.minCoeff() : std::numeric_limits<double>::infinity();
-  // Rank-revealing solve of the small triangular system (guards against an unexcited direction).
-  const Eigen::VectorXd theta =
-      r11.completeOrthogonalDecomposition().solve(r.topRightCorner(p, 1)).cwiseQuotient(column_norm);
-  out.B = Eigen::Map<const Eigen::MatrixXd>(theta.data(), n, m);
-  out.D = Eigen::Map<const Eigen::MatrixXd>(theta.data() + n * m, l, m);
-  for (Eigen::Index e = 0; e < experiments; ++e) out.x0.push_back(theta.segment(n * m + l * m + e * n, n));
-  return out;
 }
 
 /// The band [lo, hi] in which the inputs carry power: frequencies whose summed
@@ -327,11 +221,17 @@ inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& option
   const HankelLayout& lay = hc.layout;
   const double tol = options.rank_tolerance;
 
-  // Step 2: oblique projections O_i and O_{i-1}.
+  // Step 2: oblique projections O_i and O_{i-1} (independent: one per core;
+  // O_{i-1} is used in step 5).
   const Eigen::MatrixXd yf = hc.l_rows(lay.y_rows(i, 2 * i - 1));
   const Eigen::MatrixXd uf = hc.l_rows(lay.u_rows(i, 2 * i - 1));
   const Eigen::MatrixXd wp = detail::vstack(hc.l_rows(lay.u_rows(0, i - 1)), hc.l_rows(lay.y_rows(0, i - 1)));
-  const detail::ObliqueProjection oi = detail::oblique_projection(yf, uf, wp, tol, options.oblique_min_sine);
+  const Eigen::MatrixXd yf1 = hc.l_rows(lay.y_rows(i + 1, 2 * i - 1));
+  const Eigen::MatrixXd uf1 = hc.l_rows(lay.u_rows(i + 1, 2 * i - 1));
+  const Eigen::MatrixXd wp1 = detail::vstack(hc.l_rows(lay.u_rows(0, i)), hc.l_rows(lay.y_rows(0, i)));
+  detail::ObliqueProjection oi, oi1;
+  parallel_invoke([&] { oi = detail::oblique_projection(yf, uf, wp, tol, options.oblique_min_sine); },
+                  [&] { oi1 = detail::oblique_projection(yf1, uf1, wp1, tol, options.oblique_min_sine); });
   res.past_future_min_sine = oi.min_sine;
   res.oblique_dropped_directions = oi.dropped_directions;
 
@@ -397,10 +297,6 @@ inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& option
   }
 
   // Step 5: states, B and D from the projections, noise covariances, Kalman gain.
-  const Eigen::MatrixXd yf1 = hc.l_rows(lay.y_rows(i + 1, 2 * i - 1));
-  const Eigen::MatrixXd uf1 = hc.l_rows(lay.u_rows(i + 1, 2 * i - 1));
-  const Eigen::MatrixXd wp1 = detail::vstack(hc.l_rows(lay.u_rows(0, i)), hc.l_rows(lay.y_rows(0, i)));
-  const detail::ObliqueProjection oi1 = detail::oblique_projection(yf1, uf1, wp1, tol, options.oblique_min_sine);
   const auto gamma_cod = gamma.completeOrthogonalDecomposition();
   const Eigen::MatrixXd xi = gamma_cod.solve(oi.o);
   const Eigen::MatrixXd xi1 = gamma_up.completeOrthogonalDecomposition().solve(oi1.o);
@@ -504,10 +400,22 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
   }
 
   const double nyquist = 0.5 / data.Ts;
-  auto [band_lo, band_hi] = detail::excited_band(data);
+  // The excited band decides the grid; the model-free data checks need only
+  // the data: one core each.
+  double band_lo = 0, band_hi = 0;
+  IoData decimated;
+  ModelFreeDataWarnings data_checks;
+  parallel_invoke(
+      [&] {
+        std::tie(band_lo, band_hi) = detail::excited_band(data);
+        res.decimation = detail::decimation_factor(1.0 / data.Ts, band_hi, options.decimation);
+        // Zero-phase 8th-order Butterworth at 0.8 x the new Nyquist frequency on
+        // inputs and outputs alike (their relation is unchanged), then every r-th sample.
+        if (res.decimation > 1) decimated = decimate(data, res.decimation);
+      },
+      [&] { data_checks = model_free_data_warnings(data, "n4sid"); });
   res.excited_band_low_hz = band_lo;
   res.excited_band_high_hz = band_hi;
-  res.decimation = detail::decimation_factor(1.0 / data.Ts, band_hi, options.decimation);
   detail::SubspaceCore core;
   // The order is chosen at a horizon sized for max_order; the model of that
   // order is then identified at the horizon sized for it (unless the user fixed one).
@@ -527,9 +435,7 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
     return c;
   };
   if (res.decimation > 1) {
-    // Zero-phase 8th-order Butterworth at 0.8 x the new Nyquist frequency on
-    // inputs and outputs alike (their relation is unchanged), then every r-th sample.
-    core = identify(decimate(data, res.decimation));
+    core = identify(decimated);
     core.A = detail::principal_root(core.A, res.decimation);
     res.warnings.push_back("n4sid: the inputs excite only 0.." + format_number(band_hi) + " Hz of " + format_number(nyquist) +
                            " Hz: identified on a grid decimated by " + std::to_string(res.decimation) +
@@ -549,8 +455,8 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
   res.oblique_dropped_directions = core.oblique_dropped_directions;
   res.warnings.insert(res.warnings.end(), core.warnings.begin(), core.warnings.end());
   if (!core.order_warning.empty()) res.warnings.push_back(core.order_warning);
-  for (auto& w : identification_data_warnings(data, 2 * res.order,
-                                              "a state-space model of order " + std::to_string(res.order), "n4sid"))
+  for (auto& w : identification_data_warnings(data, 2 * res.order, "a state-space model of order " + std::to_string(res.order),
+                                              "n4sid", std::move(data_checks)))
     res.warnings.push_back(std::move(w));
   const Eigen::Index n = res.order;
   const Eigen::MatrixXd& A = core.A;
@@ -574,7 +480,9 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
   // Step 6: B, D, x0 on the simulation error.
   std::vector<Eigen::VectorXd> x0(data.experiments.size(), Eigen::VectorXd::Zero(n));
   if (options.refine_bdx) {
-    const detail::BdxEstimate bdx = detail::estimate_bdx(A, C, data, options.bdx_max_samples);
+    BdxLeastSquaresOptions bo;
+    bo.max_samples = options.bdx_max_samples;
+    const BdxLeastSquaresResult bdx = bdx_least_squares(A, C, data, bo);
     B = bdx.B;
     D = bdx.D;
     x0 = bdx.x0;

@@ -1,6 +1,7 @@
 // Tests of core/parallel_for.hpp: every index exactly once, nothing for an
-// empty range, and the exception of the lowest failing index, after every
-// other index has run.
+// empty range, the exception of the lowest failing index, after every other
+// index has run; a nested loop runs on its caller's thread; parallel_invoke
+// runs each task once.
 #include <sysid/core/parallel_for.hpp>
 
 #include <gtest/gtest.h>
@@ -8,6 +9,7 @@
 #include <atomic>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace test_unit_core_parallel_for {
@@ -39,6 +41,39 @@ TEST(ParallelFor, RethrowsTheLowestFailingIndexAfterTheOthersRan) {
       EXPECT_EQ(std::string(e.what()), "index 3");
     }
     for (std::size_t k = 0; k < calls.size(); ++k) EXPECT_EQ(calls[k].load(), 1) << "index " << k;
+  }
+}
+
+TEST(ParallelFor, ANestedLoopRunsInOrderOnItsCallersThread) {
+  std::vector<std::vector<std::size_t>> order(4);
+  std::vector<int> other_thread(4, 0);
+  sysid::parallel_for(order.size(), [&](std::size_t outer) {
+    const std::thread::id caller = std::this_thread::get_id();
+    sysid::parallel_for(50, [&](std::size_t inner) {
+      order[outer].push_back(inner);  // unsynchronised: safe only if the inner loop is sequential
+      if (std::this_thread::get_id() != caller) ++other_thread[outer];
+    });
+  });
+  for (std::size_t outer = 0; outer < order.size(); ++outer) {
+    EXPECT_EQ(other_thread[outer], 0);
+    ASSERT_EQ(order[outer].size(), 50u);
+    for (std::size_t k = 0; k < 50; ++k) EXPECT_EQ(order[outer][k], k);
+  }
+  // After the nested loops, a top-level loop uses the cores again (the flag is restored).
+  std::atomic<int> calls{0};
+  sysid::parallel_for(8, [&](std::size_t) { ++calls; });
+  EXPECT_EQ(calls.load(), 8);
+}
+
+TEST(ParallelInvoke, RunsEachTaskOnceAndRethrowsTheFirstFailingTask) {
+  int a = 0, b = 0, c = 0;
+  sysid::parallel_invoke([&] { ++a; }, [&] { ++b; }, [&] { ++c; });
+  EXPECT_EQ(a + 10 * b + 100 * c, 111);
+  try {
+    sysid::parallel_invoke([] {}, [] { throw std::runtime_error("second"); }, [] { throw std::runtime_error("third"); });
+    ADD_FAILURE() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), "second");
   }
 }
 

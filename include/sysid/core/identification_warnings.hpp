@@ -8,6 +8,7 @@
 /// so every method reports the same things in the same words.
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "sysid/core/input_collinearity.hpp"
@@ -18,15 +19,35 @@
 
 namespace sysid {
 
+/// The data checks that do not depend on the model: inputs carrying the same
+/// signal and isolated output spikes. A method may run them beside its
+/// identification (they read `data` only) and hand them to
+/// identification_data_warnings once the model is known.
+struct ModelFreeDataWarnings {
+  std::vector<std::string> collinear_inputs, spikes;
+};
+
+inline ModelFreeDataWarnings model_free_data_warnings(const IoData& data, const std::string& who) {
+  return {collinear_input_warnings(data, who), isolated_spike_warnings(data, who)};
+}
+
 /// `required_excitation_order` is what the model needs of each input (see
 /// persistent_excitation.hpp; 0: no input check), `model` names it in the message
-/// ("ARX(4, 4)"), `who` prefixes every message ("arx").
+/// ("ARX(4, 4)"), `who` prefixes every message ("arx"); `model_free` are the
+/// checks above, already run on the same data.
+inline std::vector<std::string> identification_data_warnings(const IoData& data, Eigen::Index required_excitation_order,
+                                                             const std::string& model, const std::string& who,
+                                                             ModelFreeDataWarnings model_free) {
+  std::vector<std::string> out = std::move(model_free.collinear_inputs);
+  for (auto& w : insufficient_excitation_warnings(data, required_excitation_order, model, who)) out.push_back(std::move(w));
+  for (auto& w : model_free.spikes) out.push_back(std::move(w));
+  return out;
+}
+
+/// The same, running every check here.
 inline std::vector<std::string> identification_data_warnings(const IoData& data, Eigen::Index required_excitation_order,
                                                              const std::string& model, const std::string& who) {
-  std::vector<std::string> out = collinear_input_warnings(data, who);
-  for (auto& w : insufficient_excitation_warnings(data, required_excitation_order, model, who)) out.push_back(std::move(w));
-  for (auto& w : isolated_spike_warnings(data, who)) out.push_back(std::move(w));
-  return out;
+  return identification_data_warnings(data, required_excitation_order, model, who, model_free_data_warnings(data, who));
 }
 
 /// A warning when the identified discrete model is unstable (spectral radius of A

@@ -48,6 +48,7 @@
 #include <sysid/core/io_data.hpp>
 #include <sysid/core/detail/lagged_sums.hpp>
 #include <sysid/core/double_double_cholesky.hpp>
+#include <sysid/core/parallel_for.hpp>
 #include <sysid/core/format_number.hpp>
 #include <sysid/core/streaming_qr.hpp>
 #include <algorithm>
@@ -125,25 +126,32 @@ namespace detail {
 
 /// Adds H H^T of one experiment to G (in H layout). With the layout
 /// [U_{0|2i-1}; Y_{0|2i-1}] the four quadrants of G are exactly the lagged-sum
-/// matrices of (u,u), (u,y), (y,u) and (y,y).
+/// matrices of (u,u), (u,y), (y,u) and (y,y). The three products run on the
+/// cores (core/parallel_for.hpp): (u,y) has no symmetry to exploit and costs
+/// about what (u,u) and (y,y) cost together for one input and one output.
 inline void add_gram(const Experiment& e, const HankelLayout& lay, Eigen::MatrixXd& gram) {
   const Eigen::Index i2 = 2 * lay.horizon, j = e.samples() - i2 + 1;
   const Eigen::Index nu = i2 * lay.inputs, ny = i2 * lay.outputs;
-  gram.topLeftCorner(nu, nu) += lagged_sums(e.u, e.u, i2, j, true);
-  const Eigen::MatrixXd uy = lagged_sums(e.u, e.y, i2, j, false);
+  Eigen::MatrixXd uu, uy, yy;
+  parallel_invoke([&] { uu = lagged_sums(e.u, e.u, i2, j, true); }, [&] { uy = lagged_sums(e.u, e.y, i2, j, false); },
+                  [&] { yy = lagged_sums(e.y, e.y, i2, j, true); });
+  gram.topLeftCorner(nu, nu) += uu;
   gram.topRightCorner(nu, ny) += uy;
   gram.bottomLeftCorner(ny, nu) += uy.transpose();
-  gram.bottomRightCorner(ny, ny) += lagged_sums(e.y, e.y, i2, j, true);
+  gram.bottomRightCorner(ny, ny) += yy;
 }
 
 /// add_gram in double-double.
 inline void add_gram_double_double(const Experiment& e, const HankelLayout& lay, DoubleDoubleMatrix& gram) {
   const Eigen::Index i2 = 2 * lay.horizon, j = e.samples() - i2 + 1, nu = i2 * lay.inputs;
-  add_block(gram, 0, 0, lagged_sums_double_double(e.u, e.u, i2, j, true));
-  const DoubleDoubleMatrix uy = lagged_sums_double_double(e.u, e.y, i2, j, false);
+  DoubleDoubleMatrix uu, uy, yy;
+  parallel_invoke([&] { uu = lagged_sums_double_double(e.u, e.u, i2, j, true); },
+                  [&] { uy = lagged_sums_double_double(e.u, e.y, i2, j, false); },
+                  [&] { yy = lagged_sums_double_double(e.y, e.y, i2, j, true); });
+  add_block(gram, 0, 0, uu);
   add_block(gram, 0, nu, uy);
   add_block(gram, nu, 0, uy, /*transposed=*/true);
-  add_block(gram, nu, nu, lagged_sums_double_double(e.y, e.y, i2, j, true));
+  add_block(gram, nu, nu, yy);
 }
 
 /// Folds the rows of H^T of one experiment into the streaming QR.

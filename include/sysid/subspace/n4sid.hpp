@@ -31,7 +31,8 @@
 ///     Kalman filter gives K and the innovation covariance (VODM sec. 4.3.3).
 ///  6. B, D and x0 are re-estimated by linear least squares on the simulation
 ///     error over the data (A and C fixed), which is what the simulation fit
-///     measures (the approach of SLICOT IB01CD / MATLAB's n4sid 'Focus simulation').
+///     measures (the approach of SLICOT IB01CD / MATLAB's n4sid 'Focus simulation';
+///     subspace/bdx_least_squares.hpp).
 ///
 /// Data are mean-removed (offsets returned) and every channel is scaled to unit
 /// RMS before identification; the model is returned in the original units.
@@ -44,6 +45,12 @@
 /// the qr route) plus O(k^3) for the projections, k = 2 i (m+l); memory O(k^2)
 /// besides the data. The B/D/x0 regression costs O(N l p^2) with
 /// p = n m + l m + n; it uses at most `bdx_max_samples` samples per experiment.
+///
+/// Cores (core/parallel_for.hpp): the excited-band estimate and decimation run
+/// beside the model-free data checks, the three lagged-sum products of the
+/// Gram matrix beside each other, O_i beside O_{i-1}, and the B/D/x0 regression
+/// in two pieces. Each piece's arithmetic is fixed, so the model is the same
+/// on any number of cores.
 #include <sysid/core/io_data.hpp>
 #include <sysid/core/state_space.hpp>
 #include <sysid/hankel/block_hankel.hpp>
