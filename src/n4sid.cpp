@@ -45,16 +45,6 @@ inline Eigen::MatrixXd row_space_basis(const Eigen::MatrixXd& rows, double rel_t
   return svd.matrixU().leftCols(rank);
 }
 
-/// Pseudo-inverse with relative rank tolerance.
-inline Eigen::MatrixXd pseudo_inverse(const Eigen::MatrixXd& m, double rel_tol) {
-  Eigen::BDCSVD<Eigen::MatrixXd> svd(m, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  const Eigen::VectorXd& s = svd.singularValues();
-  Eigen::VectorXd inv = Eigen::VectorXd::Zero(s.size());
-  for (Eigen::Index k = 0; k < s.size(); ++k)
-    if (s(k) > rel_tol * s(0)) inv(k) = 1.0 / s(k);
-  return svd.matrixV() * inv.asDiagonal() * svd.matrixU().transpose();
-}
-
 /// Oblique projection of future outputs along future inputs onto the past, in
 /// coefficient space (VODM eq. 1.7 with M = W_p Pi_{U_f}^perp):
 ///   O = Y_f M^+ W_p,   O Pi_{U_f}^perp = Y_f M^+ M.
@@ -72,7 +62,10 @@ inline Eigen::MatrixXd pseudo_inverse(const Eigen::MatrixXd& m, double rel_tol) 
 /// those principal angles, and directions with sin(theta) <= min_sine are left
 /// out of O: their effect cannot be told apart from that of the future inputs.
 /// The amplification of noise into O is then at most 1 / min_sine.
-/// O Pi_{U_f}^perp needs no such care: Y_f M^+ M is an orthogonal projection.
+/// O Pi_{U_f}^perp needs no such care: Y_f M^+ M is an orthogonal projection,
+/// onto the row space of M = T (W Pi_{U_f}^perp), i.e. that of W Pi_{U_f}^perp,
+/// spanned by the right singular vectors of the sines above rel_tol (relative
+/// to the largest): the same SVD serves both (M^+ M = V_r V_r^T).
 struct ObliqueProjection {
   Eigen::MatrixXd o;          ///< O_i
   Eigen::MatrixXd o_perp;     ///< O_i Pi_{U_f}^perp
@@ -86,12 +79,14 @@ inline ObliqueProjection oblique_projection(const Eigen::MatrixXd& yf, const Eig
   const Eigen::MatrixXd vu = row_space_basis(uf, rel_tol);
   auto perp = [&vu](const Eigen::MatrixXd& x) -> Eigen::MatrixXd { return x - (x * vu) * vu.transpose(); };
   ObliqueProjection p;
-  const Eigen::MatrixXd m = perp(wp);
-  p.o_perp = yf * (pseudo_inverse(m, rel_tol) * m);
   p.yf_perp = perp(yf);
   const Eigen::MatrixXd w = row_space_basis(wp, rel_tol).transpose();
   Eigen::BDCSVD<Eigen::MatrixXd> svd(perp(w), Eigen::ComputeThinU | Eigen::ComputeThinV);
   const Eigen::VectorXd& sines = svd.singularValues();
+  Eigen::Index rank = 0;
+  while (rank < sines.size() && sines(rank) > rel_tol * sines(0)) ++rank;
+  const auto v_r = svd.matrixV().leftCols(rank);
+  p.o_perp = (yf * v_r) * v_r.transpose();
   Eigen::VectorXd inv = Eigen::VectorXd::Zero(sines.size());
   for (Eigen::Index k = 0; k < sines.size(); ++k) {
     if (sines(k) > std::max(min_sine, rel_tol))
@@ -496,46 +491,12 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
                              " after column scaling); some input directions are poorly excited");
   }
 
-  // Fit on the estimation data (scaled units: fit % is scale-invariant). The
-  // data are mean-free after scaling only when remove_means is on, so the
-  // spread is accumulated about the overall mean; one experiment's simulation
-  // is held at a time unless its residuals are needed for the noise model.
-  // On a decimated grid the projections give K at the wrong rate: the noise
-  // model comes from the residuals at the original rate instead
-  // (subspace/innovation_model.hpp).
-  const bool noise_model_from_residuals = options.estimate_kalman_gain && res.decimation > 1;
-  std::vector<Eigen::MatrixXd> residuals;
-  {
-    const StateSpace scaled(A, B, C, D, data.Ts);
-    FitAccumulator fit(l);
-    for (std::size_t e = 0; e < data.experiments.size(); ++e) {
-      const Experiment& ex = data.experiments[e];
-      Eigen::MatrixXd residual = ex.y - simulate(scaled, ex.u, x0[e]);
-      fit.add_residual(ex.y, residual);
-      if (noise_model_from_residuals) residuals.push_back(std::move(residual));
-    }
-    res.fit_percent = fit.fit_percent();
-  }
-  if (noise_model_from_residuals) {
-    const InnovationModelResult nm = innovation_model(A, C, residuals);
-    residuals.clear();
-    res.kalman_iterations = nm.iterations;
-    if (nm.status == InnovationModelResult::Status::converged) {
-      K = nm.K;
-      innovation = nm.innovation_covariance;
-    } else {
-      innovation = nm.innovation_covariance;
-      res.warnings.push_back("n4sid: Kalman gain not computed: " + nm.message);
-    }
-  }
-
-  // Back to original units: u_s = u / su, y_s = y / sy.
+  // Back to original units: u_s = u / su, y_s = y / sy. The model's checks
+  // below need only A, B, C, D: they run beside the estimation fit.
   const Eigen::MatrixXd su_inv = su.cwiseInverse().asDiagonal();
   res.model = StateSpace(A, B * su_inv, sy.asDiagonal() * C, sy.asDiagonal() * D * su_inv, data.Ts);
   res.model.input_names = data.input_names;
   res.model.output_names = data.output_names;
-  if (K.size() > 0) res.K = K * sy.cwiseInverse().asDiagonal();
-  res.noise_covariance = sy.asDiagonal() * innovation * sy.asDiagonal();
   res.x0 = x0.front();
   if (band_limit) {
     // Filter at the inputs: one copy per input channel. The filtered data's x0
@@ -547,11 +508,6 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
     limited.output_names = res.model.output_names;
     Eigen::VectorXd x0_all = Eigen::VectorXd::Zero(limited.order());
     x0_all.tail(res.model.order()) = res.x0;
-    if (res.K.size() > 0) {
-      Eigen::MatrixXd k_all = Eigen::MatrixXd::Zero(limited.order(), l);
-      k_all.bottomRows(res.model.order()) = res.K;
-      res.K = k_all;
-    }
     res.model = limited;
     res.x0 = x0_all;
     res.band_limited = true;
@@ -559,24 +515,67 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
   if (!A.allFinite() || !res.model.B.allFinite() || !res.model.D.allFinite())
     throw NumericalError("n4sid: the identified matrices contain NaN or Inf");
 
+  // Fit on the estimation data (scaled units: fit % is scale-invariant). The
+  // data are mean-free after scaling only when remove_means is on, so the
+  // spread is accumulated about the overall mean; one experiment's simulation
+  // is held at a time unless its residuals are needed for the noise model.
+  // On a decimated grid the projections give K at the wrong rate: the noise
+  // model comes from the residuals at the original rate instead
+  // (subspace/innovation_model.hpp).
+  const bool noise_model_from_residuals = options.estimate_kalman_gain && res.decimation > 1;
+  std::vector<std::string> fit_warnings, model_warnings;
+  auto fit_and_noise_model = [&] {
+    std::vector<Eigen::MatrixXd> residuals;
+    const StateSpace scaled(A, B, C, D, data.Ts);
+    FitAccumulator fit(l);
+    for (std::size_t e = 0; e < data.experiments.size(); ++e) {
+      const Experiment& ex = data.experiments[e];
+      Eigen::MatrixXd residual = ex.y - simulate(scaled, ex.u, x0[e]);
+      fit.add_residual(ex.y, residual);
+      if (noise_model_from_residuals) residuals.push_back(std::move(residual));
+    }
+    res.fit_percent = fit.fit_percent();
+    if (!noise_model_from_residuals) return;
+    const InnovationModelResult nm = innovation_model(A, C, residuals);
+    res.kalman_iterations = nm.iterations;
+    innovation = nm.innovation_covariance;
+    if (nm.status == InnovationModelResult::Status::converged)
+      K = nm.K;
+    else
+      fit_warnings.push_back("n4sid: Kalman gain not computed: " + nm.message);
+  };
   // Stability and band checks.
-  for (auto& w : unstable_model_warnings(res.model, "n4sid", "enforce_stability (--enforce-stability) forces a stable A"))
-    res.warnings.push_back(std::move(w));
-  const double lo = band_lo, hi = band_hi;
-  if (hi < 0.8 * nyquist) {
-    const double in_band = detail::peak_gain(res.model, std::max(lo, 0.0), hi, 200);
-    const double out_band = detail::peak_gain(res.model, std::min(1.2 * hi, nyquist), nyquist, 200);
-    res.out_of_band_gain_ratio = in_band > 0 ? out_band / in_band : 0.0;
-    if (res.out_of_band_gain_ratio > 0.5) {
-      std::ostringstream w;
-      w.precision(3);
-      w << "n4sid: the inputs excite only " << lo << ".." << hi << " Hz, but the model's gain above " << 1.2 * hi
-        << " Hz reaches " << res.out_of_band_gain_ratio
-        << " x its in-band peak: that gain is not determined by the data. Remedy (Par2 paper): band-limit the data and the "
-           "model with a Butterworth low-pass (--band-limit)";
-      res.warnings.push_back(w.str());
+  auto check_model = [&] {
+    model_warnings = unstable_model_warnings(res.model, "n4sid", "enforce_stability (--enforce-stability) forces a stable A");
+    const double lo = band_lo, hi = band_hi;
+    if (hi < 0.8 * nyquist) {
+      const double in_band = detail::peak_gain(res.model, std::max(lo, 0.0), hi, 200);
+      const double out_band = detail::peak_gain(res.model, std::min(1.2 * hi, nyquist), nyquist, 200);
+      res.out_of_band_gain_ratio = in_band > 0 ? out_band / in_band : 0.0;
+      if (res.out_of_band_gain_ratio > 0.5) {
+        std::ostringstream w;
+        w.precision(3);
+        w << "n4sid: the inputs excite only " << lo << ".." << hi << " Hz, but the model's gain above " << 1.2 * hi
+          << " Hz reaches " << res.out_of_band_gain_ratio
+          << " x its in-band peak: that gain is not determined by the data. Remedy (Par2 paper): band-limit the data and "
+             "the model with a Butterworth low-pass (--band-limit)";
+        model_warnings.push_back(w.str());
+      }
+    }
+  };
+  parallel_invoke(fit_and_noise_model, check_model);
+  for (auto* list : {&fit_warnings, &model_warnings})
+    for (auto& w : *list) res.warnings.push_back(std::move(w));
+
+  if (K.size() > 0) {
+    res.K = K * sy.cwiseInverse().asDiagonal();
+    if (res.band_limited) {  // the filter states have no innovation input
+      Eigen::MatrixXd k_all = Eigen::MatrixXd::Zero(res.model.order(), l);
+      k_all.bottomRows(n) = res.K;
+      res.K = k_all;
     }
   }
+  res.noise_covariance = sy.asDiagonal() * innovation * sy.asDiagonal();
   return res;
 }
 
