@@ -10,9 +10,11 @@
 /// that are shifted copies of a few signals (a prediction-error Jacobian).
 #include <Eigen/Dense>
 #include <sysid/core/double_double.hpp>
+#include <sysid/core/parallel_for.hpp>
 
 #include <algorithm>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 namespace sysid::detail {
@@ -168,32 +170,36 @@ inline DoubleDoubleMatrix shifted_columns_gram_double_double(const std::vector<E
     padded[k].head(n) = signals[k];
   }
   // table[a * count + b] (a <= b): S_ab(i, j) for i <= hi[a], j <= hi[b].
+  // The pairs are independent: one per core at a time (core/parallel_for.hpp).
   std::vector<DoubleDoubleMatrix> table(count * count);
-  std::vector<DoubleDouble> base;
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
   for (std::size_t a = 0; a < count; ++a)
-    for (std::size_t b = a; b < count; ++b) {
-      if (hi[a] < 0 || hi[b] < 0) continue;
-      const Eigen::VectorXd &x = padded[a], &y = padded[b];
-      DoubleDoubleMatrix& s = table[a * count + b];
-      s = DoubleDoubleMatrix::zero(hi[a] + 1, hi[b] + 1);
-      // Diagonals i - j = L >= 0 start at S(L, 0); those with j - i = L > 0 at S(0, L).
-      const Eigen::Index below = hi[a] - lo[b], above = hi[b] - lo[a];
-      if (below >= 0) {
-        base.assign(static_cast<std::size_t>(below + 1), DoubleDouble());
-        correlate_double_double(x.data(), y.data(), n, below + 1, base.data());
-        for (Eigen::Index lag = 0; lag <= std::min(below, hi[a]); ++lag) s.set(lag, 0, base[static_cast<std::size_t>(lag)]);
-      }
-      if (a == b) {
-        // S(0, L) = S(L, 0) for a signal with itself: no second correlation.
-        for (Eigen::Index lag = 1; lag <= std::min(below, hi[a]); ++lag) s.set(0, lag, s(lag, 0));
-      } else if (above >= 1) {
-        base.assign(static_cast<std::size_t>(above + 1), DoubleDouble());
-        correlate_double_double(y.data(), x.data(), n, above + 1, base.data());
-        for (Eigen::Index lag = 1; lag <= std::min(above, hi[b]); ++lag) s.set(0, lag, base[static_cast<std::size_t>(lag)]);
-      }
-      for (Eigen::Index i = 1; i <= hi[a]; ++i)
-        for (Eigen::Index j = 1; j <= hi[b]; ++j) s.set(i, j, s(i - 1, j - 1) - two_prod(x(n - i), y(n - j)));
+    for (std::size_t b = a; b < count; ++b)
+      if (hi[a] >= 0 && hi[b] >= 0) pairs.emplace_back(a, b);
+  parallel_for(pairs.size(), [&](std::size_t k) {
+    const auto [a, b] = pairs[k];
+    const Eigen::VectorXd &x = padded[a], &y = padded[b];
+    DoubleDoubleMatrix& s = table[a * count + b];
+    s = DoubleDoubleMatrix::zero(hi[a] + 1, hi[b] + 1);
+    std::vector<DoubleDouble> base;
+    // Diagonals i - j = L >= 0 start at S(L, 0); those with j - i = L > 0 at S(0, L).
+    const Eigen::Index below = hi[a] - lo[b], above = hi[b] - lo[a];
+    if (below >= 0) {
+      base.assign(static_cast<std::size_t>(below + 1), DoubleDouble());
+      correlate_double_double(x.data(), y.data(), n, below + 1, base.data());
+      for (Eigen::Index lag = 0; lag <= std::min(below, hi[a]); ++lag) s.set(lag, 0, base[static_cast<std::size_t>(lag)]);
     }
+    if (a == b) {
+      // S(0, L) = S(L, 0) for a signal with itself: no second correlation.
+      for (Eigen::Index lag = 1; lag <= std::min(below, hi[a]); ++lag) s.set(0, lag, s(lag, 0));
+    } else if (above >= 1) {
+      base.assign(static_cast<std::size_t>(above + 1), DoubleDouble());
+      correlate_double_double(y.data(), x.data(), n, above + 1, base.data());
+      for (Eigen::Index lag = 1; lag <= std::min(above, hi[b]); ++lag) s.set(0, lag, base[static_cast<std::size_t>(lag)]);
+    }
+    for (Eigen::Index i = 1; i <= hi[a]; ++i)
+      for (Eigen::Index j = 1; j <= hi[b]; ++j) s.set(i, j, s(i - 1, j - 1) - two_prod(x(n - i), y(n - j)));
+  });
   DoubleDoubleMatrix gram{Eigen::MatrixXd(p, p), Eigen::MatrixXd(p, p)};
   for (Eigen::Index r = 0; r < p; ++r)
     for (Eigen::Index c = 0; c < p; ++c) {
