@@ -517,8 +517,8 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
 
   // Fit on the estimation data (scaled units: fit % is scale-invariant). The
   // data are mean-free after scaling only when remove_means is on, so the
-  // spread is accumulated about the overall mean; one experiment's simulation
-  // is held at a time unless its residuals are needed for the noise model.
+  // spread is accumulated about the overall mean; the simulation is consumed
+  // block by block unless its residuals are needed for the noise model.
   // On a decimated grid the projections give K at the wrong rate: the noise
   // model comes from the residuals at the original rate instead
   // (subspace/innovation_model.hpp).
@@ -530,9 +530,15 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
     FitAccumulator fit(l);
     for (std::size_t e = 0; e < data.experiments.size(); ++e) {
       const Experiment& ex = data.experiments[e];
-      Eigen::MatrixXd residual = ex.y - simulate(scaled, ex.u, x0[e]);
-      fit.add_residual(ex.y, residual);
-      if (noise_model_from_residuals) residuals.push_back(std::move(residual));
+      if (noise_model_from_residuals) {
+        residuals.push_back(ex.y - simulate(scaled, ex.u, x0[e]));
+        fit.add_residual(ex.y, residuals.back());
+      } else {  // block by block: no copy of the record's outputs (10^6 x 8 samples: 128 MB less)
+        simulate_blockwise(scaled, ex.u, x0[e], [&](Eigen::Index k0, const Eigen::Ref<Eigen::MatrixXd>& yb) {
+          const auto y = ex.y.middleRows(k0, yb.rows());
+          fit.add_residual(y, y - yb);
+        });
+      }
     }
     res.fit_percent = fit.fit_percent();
     if (!noise_model_from_residuals) return;

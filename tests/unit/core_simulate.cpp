@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <limits>
 #include <random>
 #include <stdexcept>
 #include "random_matrices.hpp"
@@ -123,6 +124,30 @@ TEST(CoreSimulate, StaticGainAndEmptyRecord) {
   const MatrixXd y = sysid::simulate(s, MatrixXd(0, 2));
   EXPECT_EQ(y.rows(), 0);
   EXPECT_EQ(y.cols(), 1);
+}
+
+TEST(CoreSimulate, BlockwiseHandsOverSimulatesOutputBitForBitInOrder) {
+  // 10 000 samples: two full blocks of 4096 and a partial one, from a non-zero x0.
+  std::mt19937_64 rng(11);
+  const sysid::StateSpace s = random_discrete(rng, 5, 2, 3, 0.9);
+  const MatrixXd u = randn(rng, 10000, 2);
+  const VectorXd x0 = randn(rng, 5, 1);
+  const MatrixXd whole = sysid::simulate(s, u, x0);
+  MatrixXd pieced = MatrixXd::Constant(10000, 3, std::numeric_limits<double>::quiet_NaN());
+  Eigen::Index next = 0;
+  int blocks = 0;
+  sysid::simulate_blockwise(s, u, x0, [&](Eigen::Index k0, const Eigen::Ref<MatrixXd>& yb) {
+    EXPECT_EQ(k0, next);
+    EXPECT_LE(yb.rows(), 4096);
+    pieced.middleRows(k0, yb.rows()) = yb;
+    next = k0 + yb.rows();
+    ++blocks;
+  });
+  EXPECT_EQ(next, 10000);
+  EXPECT_EQ(blocks, 3);
+  EXPECT_TRUE((pieced.array() == whole.array()).all());
+  EXPECT_THROW(sysid::simulate_blockwise(s, MatrixXd::Zero(10, 3), VectorXd(), [](Eigen::Index, const Eigen::Ref<MatrixXd>&) {}),
+               std::invalid_argument);
 }
 
 TEST(CoreSimulate, RejectsViolatedPreconditions) {

@@ -81,9 +81,34 @@ Eigen::MatrixXd simulate_states(const StateSpace& sys, const Eigen::MatrixBase<D
   return states.transpose();
 }
 
+/// Purpose: the output of simulate(), handed over block by block, for callers
+/// that only accumulate from it (a fit, a residual norm): memory O(n * block +
+/// block * l) instead of O(N l). consume(k0, y_block) receives the rows
+/// k0 .. k0 + b - 1 of the output (b <= 4096; y_block is valid during the call).
+/// Preconditions and arithmetic are simulate()'s (bit-identical blocks).
+template <class Derived, class Consumer>
+void simulate_blockwise(const StateSpace& sys, const Eigen::MatrixBase<Derived>& u, const Eigen::VectorXd& x0,
+                        Consumer&& consume) {
+  detail::check_simulation_args(sys, u.cols(), x0, "simulate");
+  const Eigen::Ref<const Eigen::MatrixXd> uref(u.derived());  // no copy for column-major storage
+  const Eigen::Index n = sys.order(), N = u.rows();
+  Eigen::VectorXd x = x0.size() == 0 ? Eigen::VectorXd(Eigen::VectorXd::Zero(n)) : x0;
+  Eigen::MatrixXd states(n, std::min(N, detail::kSimulateBlock)), y(std::min(N, detail::kSimulateBlock), sys.outputs());
+  for (Eigen::Index k0 = 0; k0 < N; k0 += detail::kSimulateBlock) {
+    const Eigen::Index b = std::min(detail::kSimulateBlock, N - k0);
+    const Eigen::Ref<const Eigen::MatrixXd> ub = uref.middleRows(k0, b);
+    Eigen::Ref<Eigen::MatrixXd> xb = states.leftCols(b);
+    detail::simulate_block(sys, ub, x, xb);
+    Eigen::Ref<Eigen::MatrixXd> yb = y.topRows(b);
+    yb.noalias() = xb.transpose() * sys.C.transpose();
+    yb.noalias() += ub * sys.D.transpose();
+    consume(k0, static_cast<const Eigen::Ref<Eigen::MatrixXd>&>(yb));
+  }
+}
+
 /// Purpose: simulated output y[0..N-1] (N x l) of a discrete-time model for input
 /// u (N x m) from initial state x0 (empty = zero).
-/// Method: block recursion described in the file comment.
+/// Method: block recursion described in the file comment (simulate_blockwise).
 /// Preconditions: sys.Ts > 0 (throws std::invalid_argument otherwise);
 /// u.cols() == sys.inputs(); x0.size() in {0, n}.
 /// Numerical aspects: O(N (n^2 + n m + l n + l m)) flops, memory O(n * 4096 + N l).
@@ -91,21 +116,10 @@ Eigen::MatrixXd simulate_states(const StateSpace& sys, const Eigen::MatrixBase<D
 template <class Derived>
 Eigen::MatrixXd simulate(const StateSpace& sys, const Eigen::MatrixBase<Derived>& u,
                          const Eigen::VectorXd& x0 = Eigen::VectorXd()) {
-  detail::check_simulation_args(sys, u.cols(), x0, "simulate");
-  const Eigen::Ref<const Eigen::MatrixXd> uref(u.derived());  // no copy for column-major storage
-  const Eigen::Index n = sys.order(), N = u.rows();
-  Eigen::MatrixXd y(N, sys.outputs());
-  Eigen::VectorXd x = x0.size() == 0 ? Eigen::VectorXd(Eigen::VectorXd::Zero(n)) : x0;
-  Eigen::MatrixXd states(n, std::min(N, detail::kSimulateBlock));
-  for (Eigen::Index k0 = 0; k0 < N; k0 += detail::kSimulateBlock) {
-    const Eigen::Index b = std::min(detail::kSimulateBlock, N - k0);
-    const Eigen::Ref<const Eigen::MatrixXd> ub = uref.middleRows(k0, b);
-    Eigen::Ref<Eigen::MatrixXd> xb = states.leftCols(b);
-    detail::simulate_block(sys, ub, x, xb);
-    Eigen::Ref<Eigen::MatrixXd> yb = y.middleRows(k0, b);
-    yb.noalias() = xb.transpose() * sys.C.transpose();
-    yb.noalias() += ub * sys.D.transpose();
-  }
+  Eigen::MatrixXd y(u.rows(), sys.outputs());
+  simulate_blockwise(sys, u, x0, [&y](Eigen::Index k0, const Eigen::Ref<Eigen::MatrixXd>& yb) {
+    y.middleRows(k0, yb.rows()) = yb;
+  });
   return y;
 }
 
