@@ -431,6 +431,7 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
   };
   if (res.decimation > 1) {
     core = identify(decimated);
+    decimated = IoData();  // the rest runs at the original rate: free the copy
     core.A = detail::principal_root(core.A, res.decimation);
     res.warnings.push_back("n4sid: the inputs excite only 0.." + format_number(band_hi) + " Hz of " + format_number(nyquist) +
                            " Hz: identified on a grid decimated by " + std::to_string(res.decimation) +
