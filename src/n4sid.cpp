@@ -531,15 +531,15 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
     FitAccumulator fit(l);
     for (std::size_t e = 0; e < data.experiments.size(); ++e) {
       const Experiment& ex = data.experiments[e];
-      if (noise_model_from_residuals) {
-        residuals.push_back(ex.y - simulate(scaled, ex.u, x0[e]));
-        fit.add_residual(ex.y, residuals.back());
-      } else {  // block by block: no copy of the record's outputs (10^6 x 8 samples: 128 MB less)
-        simulate_blockwise(scaled, ex.u, x0[e], [&](Eigen::Index k0, const Eigen::Ref<Eigen::MatrixXd>& yb) {
-          const auto y = ex.y.middleRows(k0, yb.rows());
-          fit.add_residual(y, y - yb);
-        });
-      }
+      if (noise_model_from_residuals) residuals.emplace_back(ex.samples(), l);
+      // Block by block: without the noise model no copy of the record's outputs
+      // is held (10^6 x 8 samples: 128 MB less).
+      simulate_blockwise(scaled, ex.u, x0[e], [&](Eigen::Index k0, const Eigen::Ref<Eigen::MatrixXd>& yb) {
+        const auto y = ex.y.middleRows(k0, yb.rows());
+        const Eigen::MatrixXd residual = y - yb;
+        fit.add_residual(y, residual);
+        if (noise_model_from_residuals) residuals.back().middleRows(k0, yb.rows()) = residual;
+      });
     }
     res.fit_percent = fit.fit_percent();
     if (!noise_model_from_residuals) return;

@@ -102,7 +102,7 @@ void simulate_blockwise(const StateSpace& sys, const Eigen::MatrixBase<Derived>&
     Eigen::Ref<Eigen::MatrixXd> yb = y.topRows(b);
     yb.noalias() = xb.transpose() * sys.C.transpose();
     yb.noalias() += ub * sys.D.transpose();
-    consume(k0, static_cast<const Eigen::Ref<Eigen::MatrixXd>&>(yb));
+    consume(k0, yb);
   }
 }
 
