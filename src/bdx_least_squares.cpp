@@ -20,25 +20,26 @@ constexpr double kNegligibleInitialResponse = 1e-17;
 /// Experiments shorter than this are not cut (the cut costs a thread start and a merge).
 constexpr Eigen::Index kMinimumSplit = 8192;
 /// Share of an experiment's samples in the first piece. The first piece has the
-/// rows with x0 regressors (wider QR), the second first runs the recursion alone
-/// up to its start (28 ns a sample against ~90 ns for recursion, rows and QR);
-/// on the Par2 log (order 10, SISO, modal coordinates, 40 000 samples) 0.54 gave
-/// 2.1 ms against 1.9 ms run one after the other; 0.52 should about balance them
-/// (a split that is off only costs time, never accuracy).
-constexpr double kFirstPieceShare = 0.52;
+/// rows with x0 regressors (wider rows), the second first runs the recursion
+/// alone up to its start. On the Par2 log (order 10, SISO, modal coordinates,
+/// 40 000 samples, Gram route) the B/D/x0 step took 1.89, 1.77-1.83, 1.80 and
+/// 1.92 ms at shares 0.52, 0.58, 0.62 and 0.66 (min of 60, +-0.05 ms between
+/// runs): 0.58 (a split that is off only costs time, never accuracy).
+constexpr double kFirstPieceShare = 0.58;
 
 /// The regressors' recursion, one sample at a time, on the transposed state:
 /// columns q l .. q l + l - 1 of `state` hold Psi_q^T, the last l columns
 /// Lambda^T, and state <- A^T state + [u_q C^T ..., 0].
 class Recursion {
  public:
-  /// `blocks` non-empty: A^T is block diagonal with these blocks (modal
-  /// coordinates), `At` unused; otherwise the dense `At`.
-  Recursion(const Eigen::MatrixXd& At, const std::vector<detail::RealModalBlock>& blocks, const Eigen::MatrixXd& Ct,
-            Eigen::Index m)
-      : m_At(At), m_blocks(blocks), m_Ct(Ct), m_state(Ct.rows(), (m + 1) * Ct.cols()), m_next(m_state.rows(), m_state.cols()) {
+  /// `modal_At` non-null: A^T is block diagonal, A_m^T (modal coordinates),
+  /// `At` unused; otherwise the dense `At`.
+  Recursion(const Eigen::MatrixXd& At, const detail::ModalBlockLists* modal_At, const Eigen::MatrixXd& Ct, Eigen::Index m)
+      : m_At(At), m_modal_At(modal_At), m_Ct(Ct), m_state(Ct.rows(), (m + 1) * Ct.cols()), m_next(m_state.rows(), m_state.cols()) {
     m_state.leftCols(m * Ct.cols()).setZero();
     m_state.rightCols(Ct.cols()) = Ct;
+    m_input_term.assign(static_cast<std::size_t>(Ct.rows()), 0.0);
+    m_zero.assign(static_cast<std::size_t>(Ct.rows()), 0.0);
   }
 
   const Eigen::MatrixXd& state() const { return m_state; }
@@ -47,53 +48,50 @@ class Recursion {
   bool initial_response_negligible() {
     const Eigen::Index l = m_Ct.cols(), n = m_state.rows();
     const double* lambda = m_state.data() + (m_state.cols() - l) * n;  // the last l columns, contiguous
-    double response = 0;
-    for (Eigen::Index k = 0; k < n * l; ++k) response = std::max(response, std::abs(lambda[k]));
+    // Eigen's reduction: independent partial maxima, not one serial chain.
+    const double response = Eigen::Map<const Eigen::VectorXd>(lambda, n * l).cwiseAbs().maxCoeff();
     m_initial_response_peak = std::max(m_initial_response_peak, response);
     return response <= kNegligibleInitialResponse * m_initial_response_peak;
   }
 
   template <class Row>
   void advance(const Row& u) {
-    if (m_blocks.empty()) {
+    const Eigen::Index n = m_state.rows(), l = m_Ct.cols(), m = u.size();
+    if (m_modal_At) {
+      // Psi_q^T columns: A_m^T psi + u_q c_r (c_r a column of C^T, formed
+      // first: the same sum in the same order as the dense branch's); Lambda^T
+      // columns: A_m^T lambda. One pass over the state.
+      for (Eigen::Index j = 0; j < m_state.cols(); ++j) {
+        double* x = m_next.col(j).data();
+        if (j < m * l) {
+          const double uq = u(j / l);
+          const double* c = m_Ct.col(j % l).data();
+          for (Eigen::Index k = 0; k < n; ++k) m_input_term[static_cast<std::size_t>(k)] = uq * c[k];
+          m_modal_At->product(m_state.col(j).data(), m_input_term.data(), x);
+        } else {
+          m_modal_At->product(m_state.col(j).data(), m_zero.data(), x);
+        }
+      }
+    } else {
       // lazyProduct keeps this small product inline: the general GEMM dispatch
       // costs more than the product itself at these sizes.
       m_next.noalias() = m_At.lazyProduct(m_state);
-    } else {
-      // A_m^T blocks: [lambda] or [[Re, -Im], [Im, Re]] (the transpose of
-      // real_modal_block), applied down each column with scalar code: Eigen's
-      // row expressions of a column-major matrix cost more than the arithmetic.
-      for (Eigen::Index j = 0; j < m_state.cols(); ++j) {
-        const double* s = m_state.col(j).data();
-        double* x = m_next.col(j).data();
-        for (const detail::RealModalBlock& b : m_blocks) {
-          const Eigen::Index k = b.start;
-          const double re = b.lambda.real();
-          if (b.size == 1) {
-            x[k] = re * s[k];
-          } else {
-            const double im = b.lambda.imag();
-            x[k] = re * s[k] - im * s[k + 1];
-            x[k + 1] = im * s[k] + re * s[k + 1];
-          }
-        }
+      const double* ct = m_Ct.data();
+      for (Eigen::Index q = 0; q < m; ++q) {
+        const double uq = u(q);
+        double* psi = m_next.data() + q * l * n;  // Psi_q^T: columns q l .. q l + l - 1, contiguous
+        for (Eigen::Index k = 0; k < n * l; ++k) psi[k] += uq * ct[k];
       }
-    }
-    const Eigen::Index n = m_state.rows(), l = m_Ct.cols();
-    const double* ct = m_Ct.data();
-    for (Eigen::Index q = 0; q < u.size(); ++q) {
-      const double uq = u(q);
-      double* psi = m_next.data() + q * l * n;  // Psi_q^T: columns q l .. q l + l - 1, contiguous
-      for (Eigen::Index k = 0; k < n * l; ++k) psi[k] += uq * ct[k];
     }
     m_state.swap(m_next);
   }
 
  private:
   const Eigen::MatrixXd& m_At;
-  const std::vector<detail::RealModalBlock>& m_blocks;
+  const detail::ModalBlockLists* m_modal_At;
   const Eigen::MatrixXd& m_Ct;
   Eigen::MatrixXd m_state, m_next;
+  std::vector<double> m_input_term, m_zero;  // n entries each (modal branch)
   double m_initial_response_peak = 0;
 };
 
@@ -101,21 +99,18 @@ class Recursion {
 /// coordinates the regression runs in; T maps those back (empty: identity).
 struct Coordinates {
   Eigen::MatrixXd At, Ct, T;
-  std::vector<detail::RealModalBlock> blocks;
+  bool modal = false;
+  detail::ModalBlockLists modal_At;  ///< A_m^T when modal
   double modal_condition = std::numeric_limits<double>::infinity();
 };
 
 Coordinates choose_coordinates(const Eigen::MatrixXd& A, const Eigen::MatrixXd& C, double modal_condition_limit) {
   Coordinates c;
-  detail::RealModalForm form;
-  if (detail::real_modal_form(A, form) == detail::RealModalStatus::ok) {
-    const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(form.T).singularValues();
-    if (sv(sv.size() - 1) > 0) c.modal_condition = sv(0) / sv(sv.size() - 1);
-  }
-  if (c.modal_condition <= modal_condition_limit) {
-    c.T = form.T;
-    c.blocks = form.blocks;
-    c.Ct = (C * form.T).transpose();
+  if (auto form = detail::conditioned_real_modal_form(A, modal_condition_limit, c.modal_condition)) {
+    c.T = form->T;
+    c.modal = true;
+    c.modal_At = detail::ModalBlockLists(form->blocks, true);
+    c.Ct = (C * form->T).transpose();
   } else {
     c.At = A.transpose();
     c.Ct = C.transpose();
@@ -123,20 +118,38 @@ Coordinates choose_coordinates(const Eigen::MatrixXd& A, const Eigen::MatrixXd& 
   return c;
 }
 
-/// The rows of samples [begin, end) of one experiment, in their own QRs.
+/// The rows of samples [begin, end) of one experiment, in their own QRs or
+/// Gram matrices (lower triangles) of [regressors, y].
 struct Piece {
   Eigen::Index experiment = 0, begin = 0, end = 0;
-  std::optional<StreamingQR> full, reduced;  ///< rows with and without x0 regressors
+  std::optional<StreamingQR> full, reduced;  ///< rows with and without x0 regressors (QR route)
+  Eigen::MatrixXd full_gram, reduced_gram;    ///< the same rows' Gram matrices (Gram route)
   Eigen::Index full_rows = 0, reduced_rows = 0;
 };
 
-void accumulate_piece(const Coordinates& co, const Experiment& ex, Eigen::Index experiments, Piece& piece) {
+/// Rows of the regression as they are formed: one sample's entries contiguous.
+using RowBuffer = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+/// Hands a block of rows to the piece's QRs or Gram matrices.
+void add_rows(Piece& piece, bool gram, const Eigen::Ref<const RowBuffer>& rows, bool full) {
+  if (rows.rows() == 0) return;
+  if (gram) (full ? piece.full_gram : piece.reduced_gram).selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
+  else (full ? piece.full : piece.reduced)->add_rows(rows);
+}
+
+void accumulate_piece(const Coordinates& co, const Experiment& ex, Eigen::Index experiments, bool gram, Piece& piece) {
   const Eigen::Index n = co.Ct.rows(), l = co.Ct.cols(), m = ex.u.cols();
   const Eigen::Index input_columns = n * m + l * m;  // B then D: the columns every row has
   const Eigen::Index p = input_columns + n * experiments;
-  piece.full.emplace(p + 1);
-  piece.reduced.emplace(input_columns + 1);
-  Recursion rec(co.At, co.blocks, co.Ct, m);
+  piece.full_rows = piece.reduced_rows = 0;
+  if (gram) {
+    piece.full_gram.setZero(p + 1, p + 1);
+    piece.reduced_gram.setZero(input_columns + 1, input_columns + 1);
+  } else {
+    piece.full.emplace(p + 1);
+    piece.reduced.emplace(input_columns + 1);
+  }
+  Recursion rec(co.At, co.modal ? &co.modal_At : nullptr, co.Ct, m);
   for (Eigen::Index t = 0; t < piece.begin; ++t) {
     rec.initial_response_negligible();  // keeps the running peak a single pass would have
     rec.advance(ex.u.row(t));
@@ -144,7 +157,7 @@ void accumulate_piece(const Coordinates& co, const Experiment& ex, Eigen::Index 
   // Rows of `block` samples are formed together and handed to the QRs at once,
   // into buffers reused for every block (no allocation per sample).
   const Eigen::Index block = 256;
-  Eigen::MatrixXd rows(block * l, p + 1), reduced_rows(block * l, input_columns + 1);
+  RowBuffer rows(block * l, p + 1), reduced_rows(block * l, input_columns + 1);
   for (Eigen::Index start = piece.begin; start < piece.end; start += block) {
     const Eigen::Index count = std::min(block, piece.end - start);
     Eigen::Index full = 0, reduced = 0;  // rows filled in each buffer
@@ -153,18 +166,24 @@ void accumulate_piece(const Coordinates& co, const Experiment& ex, Eigen::Index 
     for (Eigen::Index k = 0; k < count; ++k) {
       const Eigen::Index t = start + k;
       const bool negligible = rec.initial_response_negligible();
-      auto r_t = negligible ? reduced_rows.middleRows(reduced * l, l) : rows.middleRows(full * l, l);
+      // Row r of this sample: [Psi_1^T(:, r) .. Psi_m^T(:, r), u(t) at D(r, q), Lambda^T(:, r) unless
+      // negligible, y_r(t)]; the state's columns are contiguous, and so are the rows of the buffers.
+      RowBuffer& buffer = negligible ? reduced_rows : rows;
+      double* row = buffer.data() + (negligible ? reduced : full) * l * buffer.cols();
       (negligible ? reduced : full) += 1;
-      const Eigen::MatrixXd& state = rec.state();
-      for (Eigen::Index q = 0; q < m; ++q) r_t.middleCols(q * n, n) = state.middleCols(q * l, l).transpose();
-      for (Eigen::Index q = 0; q < m; ++q)
-        for (Eigen::Index r = 0; r < l; ++r) r_t(r, n * m + q * l + r) = ex.u(t, q);
-      if (!negligible) r_t.middleCols(input_columns + piece.experiment * n, n) = state.rightCols(l).transpose();
-      r_t.col(r_t.cols() - 1) = ex.y.row(t).transpose();
+      const double* state = rec.state().data();
+      for (Eigen::Index r = 0; r < l; ++r, row += buffer.cols()) {
+        for (Eigen::Index q = 0; q < m; ++q) {
+          std::copy_n(state + (q * l + r) * n, n, row + q * n);
+          row[n * m + q * l + r] = ex.u(t, q);
+        }
+        if (!negligible) std::copy_n(state + (m * l + r) * n, n, row + input_columns + piece.experiment * n);
+        row[buffer.cols() - 1] = ex.y(t, r);
+      }
       rec.advance(ex.u.row(t));
     }
-    if (full > 0) piece.full->add_rows(rows.topRows(full * l));
-    if (reduced > 0) piece.reduced->add_rows(reduced_rows.topRows(reduced * l));
+    add_rows(piece, gram, rows.topRows(full * l), true);
+    add_rows(piece, gram, reduced_rows.topRows(reduced * l), false);
     piece.full_rows += full;
     piece.reduced_rows += reduced;
   }
@@ -179,10 +198,75 @@ std::vector<Piece> cut_into_pieces(const IoData& data, Eigen::Index max_samples,
     const Eigen::Index cut =
         samples >= kMinimumSplit ? static_cast<Eigen::Index>(kFirstPieceShare * static_cast<double>(samples)) : samples;
     const auto experiment = static_cast<Eigen::Index>(e);
-    pieces.push_back({experiment, 0, cut, {}, {}, 0, 0});
-    if (cut < samples) pieces.push_back({experiment, cut, samples, {}, {}, 0, 0});
+    pieces.push_back(Piece{experiment, 0, cut, {}, {}, {}, {}, 0, 0});
+    if (cut < samples) pieces.push_back(Piece{experiment, cut, samples, {}, {}, {}, {}, 0, 0});
   }
   return pieces;
+}
+
+/// Column norms of a regression from its triangle or Gram diagonal; an
+/// all-zero regressor (input constant zero) keeps scale 1 and stays zero.
+Eigen::VectorXd safe_column_norms(Eigen::VectorXd squared_norms) {
+  for (double& c : squared_norms) c = c > 0.0 ? std::sqrt(c) : 1.0;
+  return squared_norms;
+}
+
+/// QR route: merges the pieces' triangles in their order (the full ones, then
+/// the reduced ones with zeros in every x0 column) and equilibrates.
+/// Column equilibration before the rank decision: the regressors' scales can
+/// differ by many decades (C A^t and the B regressors grow like rho(A)^t when
+/// A is unstable: 1e21 over 600 samples at rho = 1.083), and a rank threshold
+/// relative to the largest pivot then discards every other column, B = D = 0.
+/// The column norms of R are those of the regression (Q is orthogonal), and
+/// R S is the R factor of M S, so scaling after the QR is scaling the data.
+void qr_route_triangle(std::vector<Piece>& pieces, Eigen::Index input_columns, Eigen::Index p, Eigen::MatrixXd& r11,
+                       Eigen::VectorXd& rhs, Eigen::VectorXd& column_norm) {
+  StreamingQR qr(p + 1), reduced_qr(input_columns + 1);
+  Eigen::Index reduced_rows = 0;
+  for (Piece& piece : pieces) {
+    if (piece.full_rows > 0) qr.add_rows(piece.full->r());
+    if (piece.reduced_rows > 0) reduced_qr.add_rows(piece.reduced->r());
+    reduced_rows += piece.reduced_rows;
+  }
+  if (reduced_rows > 0) {
+    const Eigen::MatrixXd r_reduced = reduced_qr.r();
+    Eigen::MatrixXd merged = Eigen::MatrixXd::Zero(r_reduced.rows(), p + 1);
+    merged.leftCols(input_columns) = r_reduced.leftCols(input_columns);
+    merged.col(p) = r_reduced.col(input_columns);
+    qr.add_rows(merged);
+  }
+  const Eigen::MatrixXd r = qr.r();
+  column_norm = safe_column_norms(r.topLeftCorner(p, p).colwise().squaredNorm().transpose());
+  r11 = r.topLeftCorner(p, p) * column_norm.cwiseInverse().asDiagonal();
+  rhs = r.topRightCorner(p, 1);
+}
+
+/// Gram route: sums the pieces' Gram matrices in their order, equilibrates the
+/// columns and factorises G_s = S^-1 X^T X S^-1 = r11^T r11, rhs = r11^-T S^-1 X^T y.
+/// False (use the QR route) when the Cholesky factorisation fails or the
+/// estimate of cond(G_s) exceeds max_gram_condition.
+bool gram_route_triangle(const std::vector<Piece>& pieces, Eigen::Index input_columns, Eigen::Index p,
+                         double max_gram_condition, Eigen::MatrixXd& r11, Eigen::VectorXd& rhs, Eigen::VectorXd& column_norm) {
+  Eigen::MatrixXd g = Eigen::MatrixXd::Zero(p + 1, p + 1);
+  for (const Piece& piece : pieces) {
+    g.triangularView<Eigen::Lower>() += piece.full_gram;
+    // The reduced rows have zeros in the x0 columns: their Gram adds to the
+    // B, D and y rows and columns only.
+    const Eigen::Index ic = input_columns;
+    g.topLeftCorner(ic, ic).triangularView<Eigen::Lower>() += piece.reduced_gram.topLeftCorner(ic, ic);
+    g.row(p).head(ic) += piece.reduced_gram.row(ic).head(ic);
+    g(p, p) += piece.reduced_gram(ic, ic);
+  }
+  column_norm = safe_column_norms(g.diagonal().head(p));
+  const Eigen::MatrixXd gs = column_norm.cwiseInverse().asDiagonal() *
+                             Eigen::MatrixXd(g.topLeftCorner(p, p).selfadjointView<Eigen::Lower>()) *
+                             column_norm.cwiseInverse().asDiagonal();
+  const Eigen::LLT<Eigen::MatrixXd> llt(gs);
+  // LLT::rcond is the LAPACK-style 1-norm estimate of 1 / cond(G_s) (Hager-Higham).
+  if (llt.info() != Eigen::Success || !(llt.rcond() * max_gram_condition >= 1.0)) return false;
+  r11 = llt.matrixU();
+  rhs = llt.matrixL().solve(g.row(p).head(p).transpose().cwiseQuotient(column_norm));
+  return true;
 }
 
 }  // namespace
@@ -199,44 +283,33 @@ BdxLeastSquaresResult bdx_least_squares(const Eigen::MatrixXd& A, const Eigen::M
   const Eigen::Index p = input_columns + n * experiments;
   BdxLeastSquaresResult out;
   const Coordinates co = choose_coordinates(A, C, options.modal_condition_limit);
-  out.modal_coordinates = !co.blocks.empty();
+  out.modal_coordinates = co.modal;
   out.modal_condition = co.modal_condition;
 
   std::vector<Piece> pieces = cut_into_pieces(data, options.max_samples, out.samples_used);
-  parallel_for(pieces.size(), [&](std::size_t k) {
-    accumulate_piece(co, data.experiments[static_cast<std::size_t>(pieces[k].experiment)], experiments, pieces[k]);
-  });
-  // Merge in the pieces' order: the full triangles, then the reduced ones with
-  // zeros in every x0 column.
-  StreamingQR qr(p + 1), reduced_qr(input_columns + 1);
-  for (Piece& piece : pieces) {
-    if (piece.full_rows > 0) qr.add_rows(piece.full->r());
-    if (piece.reduced_rows > 0) reduced_qr.add_rows(piece.reduced->r());
-    out.rows_without_initial_response += piece.reduced_rows;
+  auto accumulate = [&](bool gram) {
+    parallel_for(pieces.size(), [&](std::size_t k) {
+      accumulate_piece(co, data.experiments[static_cast<std::size_t>(pieces[k].experiment)], experiments, gram, pieces[k]);
+    });
+    out.rows_without_initial_response = 0;
+    for (const Piece& piece : pieces) out.rows_without_initial_response += piece.reduced_rows;
+  };
+  // The triangle and right-hand side of the column-equilibrated regression:
+  // r11 = R S^-1 (S = the columns' norms) and rhs = Q^T y, from either route.
+  Eigen::MatrixXd r11;
+  Eigen::VectorXd rhs, column_norm;
+  if (options.max_gram_condition > 0) {
+    accumulate(true);
+    out.normal_equations = gram_route_triangle(pieces, input_columns, p, options.max_gram_condition, r11, rhs, column_norm);
   }
-  if (out.rows_without_initial_response > 0) {
-    const Eigen::MatrixXd r_reduced = reduced_qr.r();
-    Eigen::MatrixXd merged = Eigen::MatrixXd::Zero(r_reduced.rows(), p + 1);
-    merged.leftCols(input_columns) = r_reduced.leftCols(input_columns);
-    merged.col(p) = r_reduced.col(input_columns);
-    qr.add_rows(merged);
+  if (!out.normal_equations) {
+    accumulate(false);
+    qr_route_triangle(pieces, input_columns, p, r11, rhs, column_norm);
   }
-  const Eigen::MatrixXd r = qr.r();
-  // Column equilibration before the rank decision: the regressors' scales can
-  // differ by many decades (C A^t and the B regressors grow like rho(A)^t when
-  // A is unstable: 1e21 over 600 samples at rho = 1.083), and a rank threshold
-  // relative to the largest pivot then discards every other column, B = D = 0.
-  // The column norms of R are those of the regression (Q is orthogonal), and
-  // R S is the R factor of M S, so scaling after the QR is scaling the data.
-  Eigen::VectorXd column_norm = r.topLeftCorner(p, p).colwise().norm().transpose();
-  for (double& c : column_norm)
-    if (!(c > 0.0)) c = 1.0;  // an all-zero regressor (input constant zero) stays zero
-  const Eigen::MatrixXd r11 = r.topLeftCorner(p, p) * column_norm.cwiseInverse().asDiagonal();
   const Eigen::VectorXd d = r11.diagonal().cwiseAbs();
   out.condition = d.minCoeff() > 0 ? d.maxCoeff() / d.minCoeff() : std::numeric_limits<double>::infinity();
   // Rank-revealing solve of the small triangular system (guards against an unexcited direction).
-  const Eigen::VectorXd theta =
-      r11.completeOrthogonalDecomposition().solve(r.topRightCorner(p, 1)).cwiseQuotient(column_norm);
+  const Eigen::VectorXd theta = r11.completeOrthogonalDecomposition().solve(rhs).cwiseQuotient(column_norm);
   out.B = Eigen::Map<const Eigen::MatrixXd>(theta.data(), n, m);
   out.D = Eigen::Map<const Eigen::MatrixXd>(theta.data() + n * m, l, m);
   for (Eigen::Index e = 0; e < experiments; ++e) out.x0.push_back(theta.segment(input_columns + e * n, n));

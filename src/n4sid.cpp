@@ -534,7 +534,7 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
       if (noise_model_from_residuals) residuals.emplace_back(ex.samples(), l);
       // Block by block: without the noise model no copy of the record's outputs
       // is held (10^6 x 8 samples: 128 MB less).
-      simulate_blockwise(scaled, ex.u, x0[e], [&](Eigen::Index k0, const Eigen::Ref<Eigen::MatrixXd>& yb) {
+      simulate_blockwise_modal(scaled, ex.u, x0[e], [&](Eigen::Index k0, const Eigen::Ref<Eigen::MatrixXd>& yb) {
         const auto y = ex.y.middleRows(k0, yb.rows());
         const Eigen::MatrixXd residual = y - yb;
         fit.add_residual(y, residual);

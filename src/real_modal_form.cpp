@@ -1,6 +1,8 @@
 // Real modal form; see include/sysid/core/detail/real_modal_form.hpp.
 #include <sysid/core/detail/real_modal_form.hpp>
 
+#include <limits>
+
 namespace sysid::detail {
 
 RealModalStatus real_modal_form(const Eigen::MatrixXd& A, RealModalForm& form) {
@@ -27,6 +29,21 @@ RealModalStatus real_modal_form(const Eigen::MatrixXd& A, RealModalForm& form) {
     }
   }
   return col == n ? RealModalStatus::ok : RealModalStatus::unpaired;
+}
+
+double modal_condition(const Eigen::MatrixXd& T) {
+  const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(T).singularValues();
+  return sv(sv.size() - 1) > 0 ? sv(0) / sv(sv.size() - 1) : std::numeric_limits<double>::infinity();
+}
+
+std::optional<RealModalForm> conditioned_real_modal_form(const Eigen::MatrixXd& A, double condition_limit,
+                                                         double& condition) {
+  condition = std::numeric_limits<double>::infinity();
+  RealModalForm form;
+  if (real_modal_form(A, form) != RealModalStatus::ok) return std::nullopt;
+  condition = modal_condition(form.T);
+  if (!(condition <= condition_limit)) return std::nullopt;
+  return form;
 }
 
 Eigen::MatrixXd real_modal_block(const RealModalBlock& block) {

@@ -150,6 +150,70 @@ TEST(CoreSimulate, BlockwiseHandsOverSimulatesOutputBitForBitInOrder) {
                std::invalid_argument);
 }
 
+/// simulate_blockwise_modal's output, gathered.
+MatrixXd simulate_modal(const sysid::StateSpace& s, const MatrixXd& u, const VectorXd& x0, double limit = 1e3) {
+  MatrixXd y(u.rows(), s.outputs());
+  sysid::simulate_blockwise_modal(
+      s, u, x0, [&](Eigen::Index k0, const Eigen::Ref<MatrixXd>& yb) { y.middleRows(k0, yb.rows()) = yb; }, limit);
+  return y;
+}
+
+TEST(CoreSimulate, ModalCoordinatesAgreeWithTheRecursionSweep) {
+  // Real modal coordinates change the rounding, not the model: up to a few eps
+  // cond(T) (<= 1e3 here) of the output scale. 1e-10 leaves a margin of ~100
+  // and still catches a wrong block sign or a swapped pair (errors of O(1)).
+  std::mt19937_64 rng(20261124);
+  int modal_runs = 0;
+  for (Eigen::Index n = 1; n <= 12; ++n)
+    for (Eigen::Index m = 0; m <= 2; ++m)
+      for (Eigen::Index l = 1; l <= 2; ++l) {
+        const sysid::StateSpace s = random_discrete(rng, n, m, l, 0.97);
+        const MatrixXd u = randn(rng, 4096 + 211, m);  // crosses a block boundary
+        const VectorXd x0 = randn(rng, n, 1);
+        const MatrixXd yref = reference_output(s, u, x0);
+        EXPECT_LT(rel_diff(simulate_modal(s, u, x0), yref), 1e-10) << "n=" << n << " m=" << m << " l=" << l;
+        EXPECT_LT(rel_diff(simulate_modal(s, u, VectorXd()), reference_output(s, u, VectorXd::Zero(n))), 1e-10);
+        if (sysid::detail::modal_recursion(s, 1e3)) ++modal_runs;
+      }
+  EXPECT_GT(modal_runs, 50);  // most random models have a well-conditioned modal form: the modal path was tested
+}
+
+TEST(CoreSimulate, ModalCoordinatesFollowLightlyDampedAndUnstableModes) {
+  // Two lightly damped pairs, a real pole and an unstable real pole, in a
+  // rotated basis: the long record and the growth must match the recursion.
+  std::mt19937_64 rng(4);
+  MatrixXd Am = MatrixXd::Zero(6, 6);
+  const double r1 = 0.999, t1 = 0.02, r2 = 0.995, t2 = 0.3;
+  Am.block(0, 0, 2, 2) << r1 * std::cos(t1), r1 * std::sin(t1), -r1 * std::sin(t1), r1 * std::cos(t1);
+  Am.block(2, 2, 2, 2) << r2 * std::cos(t2), r2 * std::sin(t2), -r2 * std::sin(t2), r2 * std::cos(t2);
+  Am(4, 4) = 0.5;
+  Am(5, 5) = 1.0005;
+  const MatrixXd T = randn(rng, 6, 6) + 3.0 * MatrixXd::Identity(6, 6);
+  const sysid::StateSpace s(T * Am * T.inverse(), randn(rng, 6, 1), randn(rng, 2, 6), randn(rng, 2, 1), 0.001);
+  ASSERT_TRUE(sysid::detail::modal_recursion(s, 1e3).has_value());
+  const MatrixXd u = randn(rng, 10000, 1);
+  const VectorXd x0 = randn(rng, 6, 1);
+  EXPECT_LT(rel_diff(simulate_modal(s, u, x0), reference_output(s, u, x0)), 1e-10);
+}
+
+TEST(CoreSimulate, ModalCoordinatesFallBackForADefectiveMatrixOrALowLimit) {
+  // A Jordan block has no modal form worth the name (cond(T) ~ 1e8 or worse):
+  // the dense recursion runs, bit for bit simulate()'s. So it does at limit 0.
+  std::mt19937_64 rng(8);
+  MatrixXd A(3, 3);
+  A << 0.9, 1, 0, 0, 0.9, 1, 0, 0, 0.9;
+  const sysid::StateSpace jordan(A, randn(rng, 3, 1), randn(rng, 1, 3), MatrixXd::Zero(1, 1), 0.1);
+  EXPECT_FALSE(sysid::detail::modal_recursion(jordan, 1e3).has_value());
+  const MatrixXd u = randn(rng, 500, 1);
+  const VectorXd x0 = randn(rng, 3, 1);
+  EXPECT_TRUE((simulate_modal(jordan, u, x0).array() == sysid::simulate(jordan, u, x0).array()).all());
+  const sysid::StateSpace s = random_discrete(rng, 4, 1, 1, 0.9);
+  const VectorXd x0s = randn(rng, 4, 1);
+  EXPECT_TRUE((simulate_modal(s, u, x0s, 0.0).array() == sysid::simulate(s, u, x0s).array()).all());
+  EXPECT_THROW(simulate_modal(s, MatrixXd::Zero(10, 2), VectorXd()), std::invalid_argument);
+  EXPECT_THROW(simulate_modal(s, u, VectorXd::Zero(3)), std::invalid_argument);
+}
+
 TEST(CoreSimulate, RejectsViolatedPreconditions) {
   std::mt19937_64 rng(9);
   sysid::StateSpace s = random_discrete(rng, 3, 2, 1, 0.5);

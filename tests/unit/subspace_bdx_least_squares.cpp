@@ -1,8 +1,9 @@
 // Tests of subspace/bdx_least_squares.hpp: exact recovery from noise-free
 // data (MIMO, two experiments, one long enough to be cut in two pieces), the
 // same least-squares solution as a dense Householder QR of the explicitly built
-// regression on noisy data, modal and original coordinates agreeing, the
-// fallback for a defective A, and bad arguments.
+// regression on noisy data, modal and original coordinates and the Gram and QR
+// routes agreeing, the QR route taken for an ill-conditioned or rank-deficient
+// regression, the fallback for a defective A, and bad arguments.
 #include <sysid/core/simulate.hpp>
 #include <sysid/subspace/bdx_least_squares.hpp>
 
@@ -114,15 +115,67 @@ TEST(BdxLeastSquares, IsTheLeastSquaresSolutionOfTheWholeRegressionOnNoisyData) 
   const Eigen::VectorXd x0a = Eigen::VectorXd::Constant(4, 1.0), x0b = Eigen::VectorXd::LinSpaced(4, 2.0, -2.0);
   const IoData data = two_experiments(sys, x0a, x0b, 0.1);
   const Reference ref = dense_reference(sys.A, sys.C, data);
-  BdxLeastSquaresOptions original;
-  original.modal_condition_limit = 0;
-  for (const BdxLeastSquaresOptions& options : {BdxLeastSquaresOptions{}, original}) {
+  // Both coordinates, both routes (the Gram route is the default here: the
+  // equilibrated regression is well conditioned).
+  BdxLeastSquaresOptions original, qr, original_qr;
+  original.modal_condition_limit = original_qr.modal_condition_limit = 0;
+  qr.max_gram_condition = original_qr.max_gram_condition = 0;
+  for (const BdxLeastSquaresOptions& options : {BdxLeastSquaresOptions{}, original, qr, original_qr}) {
     const BdxLeastSquaresResult r = bdx_least_squares(sys.A, sys.C, data, options);
     EXPECT_EQ(r.modal_coordinates, options.modal_condition_limit > 0);
+    EXPECT_EQ(r.normal_equations, options.max_gram_condition > 0);
     EXPECT_LT(relative_error(r.B, ref.B), 1e-10);
     EXPECT_LT(relative_error(r.D, ref.D), 1e-10);
     for (std::size_t e = 0; e < 2; ++e) EXPECT_LT(relative_error(r.x0[e], ref.x0[e]), 1e-9) << "experiment " << e;
   }
+}
+
+TEST(BdxLeastSquares, AnIllConditionedRegressionTakesTheQrRoute) {
+  // Two inputs that differ by 1e-4 of their size: the equilibrated triangle's
+  // diagonal ratio is ~1.1e4, the Gram matrix's condition ~1e8 > 1e6, so the
+  // normal equations are declined and the answer is the QR route's, bit for
+  // bit, and the dense reference's.
+  const StateSpace sys = test::random_modal_system(2, 2, 1, 3);
+  IoData data;
+  data.Ts = sys.Ts;
+  Eigen::MatrixXd u(12000, 2);
+  u.col(0) = test::white_noise(12000, 1, 5);
+  u.col(1) = u.col(0) + 1e-4 * test::white_noise(12000, 1, 6);
+  const Eigen::VectorXd x0 = Eigen::VectorXd::Constant(4, 1.0);
+  data.add_experiment({u, simulate(sys, u, x0) + test::white_noise(12000, 1, 7, 0.01), "collinear"});
+  const BdxLeastSquaresResult r = bdx_least_squares(sys.A, sys.C, data);
+  EXPECT_FALSE(r.normal_equations);
+  EXPECT_GT(r.condition, 1e3);
+  BdxLeastSquaresOptions qr;
+  qr.max_gram_condition = 0;
+  const BdxLeastSquaresResult q = bdx_least_squares(sys.A, sys.C, data, qr);
+  EXPECT_TRUE((r.B.array() == q.B.array()).all());
+  EXPECT_TRUE((r.x0[0].array() == q.x0[0].array()).all());
+  const Reference ref = dense_reference(sys.A, sys.C, data);
+  // Two backward-stable solutions of a regression of condition ~1e4 agree to
+  // ~eps cond^2 tan(residual angle) (measured 8e-11).
+  EXPECT_LT(relative_error(r.B, ref.B), 1e-9);
+  // With the limit raised past the condition the normal equations are used:
+  // the estimate of cond(G) is what decides.
+  BdxLeastSquaresOptions lax;
+  lax.max_gram_condition = 1e14;
+  EXPECT_TRUE(bdx_least_squares(sys.A, sys.C, data, lax).normal_equations);
+}
+
+TEST(BdxLeastSquares, AnInputThatIsZeroTakesTheQrRouteAndGetsNoGain) {
+  // A zero column makes the Gram matrix singular: Cholesky fails, the QR
+  // route's rank-revealing solve gives that input zero B and D.
+  const StateSpace sys = test::random_modal_system(2, 2, 1, 4);
+  IoData data;
+  data.Ts = sys.Ts;
+  Eigen::MatrixXd u = Eigen::MatrixXd::Zero(10000, 2);
+  u.col(0) = test::white_noise(10000, 1, 8);
+  data.add_experiment({u, simulate(sys, u), "second input off"});
+  const BdxLeastSquaresResult r = bdx_least_squares(sys.A, sys.C, data);
+  EXPECT_FALSE(r.normal_equations);
+  EXPECT_EQ(r.B.col(1).norm(), 0.0);
+  EXPECT_EQ(r.D.col(1).norm(), 0.0);
+  EXPECT_LT(relative_error(r.B.col(0), sys.B.col(0)), 1e-9);
 }
 
 TEST(BdxLeastSquares, ADefectiveAIsSolvedInItsOwnCoordinates) {

@@ -19,6 +19,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace sysid {
@@ -70,17 +71,24 @@ inline Eigen::MatrixX2d steady_state_unit_states(const SecondOrderSections& f) {
 /// chain of dependent multiply-adds, so one section alone runs at the latency of
 /// that chain; interleaved, the chains of the sections overlap in the pipeline
 /// (the decimation filtfilt of the Par2 log: about 1.3 ms -> 0.8 ms, the same output bit for bit).
-inline void cascade_inplace(const std::vector<Biquad>& q, double* x, Eigen::Index n, double* s1, double* s2) {
+/// Lanes > 1 filters that many signals at once, interleaved (x[i * Lanes + c]
+/// is sample i of signal c; s1, s2 likewise per section): the same operations
+/// per signal in packed registers (SSE2: two signals for the price of one).
+template <int Lanes = 1>
+void cascade_inplace(const std::vector<Biquad>& q, double* x, Eigen::Index n, double* s1, double* s2) {
+  using Lane = Eigen::Array<double, Lanes, 1>;
   const std::size_t sections = q.size();
   for (Eigen::Index i = 0; i < n; ++i) {
-    double v = x[i];
+    Eigen::Map<Lane> xi(x + i * Lanes);
+    Lane v = xi;
     for (std::size_t k = 0; k < sections; ++k) {
-      const double yi = q[k].b0 * v + s1[k];
-      s1[k] = q[k].b1 * v - q[k].a1 * yi + s2[k];
-      s2[k] = q[k].b2 * v - q[k].a2 * yi;
+      Eigen::Map<Lane> s1k(s1 + k * Lanes), s2k(s2 + k * Lanes);
+      const Lane yi = q[k].b0 * v + s1k;
+      s1k = q[k].b1 * v - q[k].a1 * yi + s2k;
+      s2k = q[k].b2 * v - q[k].a2 * yi;
       v = yi;
     }
-    x[i] = v;
+    xi = v;
   }
 }
 
@@ -90,10 +98,17 @@ inline std::vector<Biquad> biquads(const SecondOrderSections& f) {
   return q;
 }
 
-/// Runs the cascade over x in place, starting every section from zi * x[0].
-inline void cascade_from_steady_state(const std::vector<Biquad>& q, const Eigen::MatrixX2d& zi, Eigen::VectorXd& x) {
-  Eigen::VectorXd s1 = zi.col(0) * x(0), s2 = zi.col(1) * x(0);
-  cascade_inplace(q, x.data(), x.size(), s1.data(), s2.data());
+/// Signals in columns with each sample's values contiguous (a single column is
+/// column-major: Eigen has no row-major column vector).
+template <int Lanes>
+using InterleavedSignals = Eigen::Matrix<double, Eigen::Dynamic, Lanes, Lanes == 1 ? Eigen::ColMajor : Eigen::RowMajor>;
+
+/// Runs the cascade over the columns of x in place, starting every section from zi * x[0].
+template <int Lanes>
+void cascade_from_steady_state(const std::vector<Biquad>& q, const Eigen::MatrixX2d& zi, InterleavedSignals<Lanes>& x) {
+  // Row k of s1, s2: section k's states for every signal, contiguous.
+  InterleavedSignals<Lanes> s1 = zi.col(0) * x.row(0), s2 = zi.col(1) * x.row(0);
+  cascade_inplace<Lanes>(q, x.data(), x.rows(), s1.data(), s2.data());
 }
 
 }  // namespace detail
@@ -155,22 +170,25 @@ Eigen::MatrixXd filtfilt(const SecondOrderSections& filter, const Eigen::MatrixB
   const std::vector<detail::Biquad> q = detail::biquads(filter);
 
   Eigen::MatrixXd y(n, x.cols());
-  Eigen::VectorXd ext(n + 2 * padlen);
-  for (Eigen::Index c = 0; c < x.cols(); ++c) {
-    const double first = x(0, c);
-    const double last = x(n - 1, c);
+  // Columns two at a time (detail::cascade_inplace's lanes), a last odd one alone.
+  auto filter_columns = [&](auto lanes, Eigen::Index c) {
+    constexpr int Lanes = decltype(lanes)::value;
+    detail::InterleavedSignals<Lanes> ext(n + 2 * padlen, Lanes);
+    const auto xc = x.middleCols(c, Lanes);
     for (Eigen::Index i = 1; i <= padlen; ++i) {
-      ext(padlen - i) = 2.0 * first - x(i, c);
-      ext(padlen + n - 1 + i) = 2.0 * last - x(n - 1 - i, c);
+      ext.row(padlen - i) = 2.0 * xc.row(0) - xc.row(i);
+      ext.row(padlen + n - 1 + i) = 2.0 * xc.row(n - 1) - xc.row(n - 1 - i);
     }
-    ext.segment(padlen, n) = x.col(c);
-
-    detail::cascade_from_steady_state(q, zi, ext);
-    ext.reverseInPlace();
-    detail::cascade_from_steady_state(q, zi, ext);
-    ext.reverseInPlace();
-    y.col(c) = ext.segment(padlen, n);
-  }
+    ext.middleRows(padlen, n) = xc;
+    detail::cascade_from_steady_state<Lanes>(q, zi, ext);
+    ext.colwise().reverseInPlace();
+    detail::cascade_from_steady_state<Lanes>(q, zi, ext);
+    ext.colwise().reverseInPlace();
+    y.middleCols(c, Lanes) = ext.middleRows(padlen, n);
+  };
+  Eigen::Index c = 0;
+  for (; c + 1 < x.cols(); c += 2) filter_columns(std::integral_constant<int, 2>{}, c);
+  if (c < x.cols()) filter_columns(std::integral_constant<int, 1>{}, c);
   return y;
 }
 
