@@ -38,8 +38,6 @@ class Recursion {
       : m_At(At), m_modal_At(modal_At), m_Ct(Ct), m_state(Ct.rows(), (m + 1) * Ct.cols()), m_next(m_state.rows(), m_state.cols()) {
     m_state.leftCols(m * Ct.cols()).setZero();
     m_state.rightCols(Ct.cols()) = Ct;
-    m_input_term.assign(static_cast<std::size_t>(Ct.rows()), 0.0);
-    m_zero.assign(static_cast<std::size_t>(Ct.rows()), 0.0);
   }
 
   const Eigen::MatrixXd& state() const { return m_state; }
@@ -61,17 +59,16 @@ class Recursion {
       // Psi_q^T columns: A_m^T psi + u_q c_r (c_r a column of C^T, formed
       // first: the same sum in the same order as the dense branch's); Lambda^T
       // columns: A_m^T lambda. One pass over the state.
-      for (Eigen::Index j = 0; j < m_state.cols(); ++j) {
-        double* x = m_next.col(j).data();
-        if (j < m * l) {
-          const double uq = u(j / l);
-          const double* c = m_Ct.col(j % l).data();
-          for (Eigen::Index k = 0; k < n; ++k) m_input_term[static_cast<std::size_t>(k)] = uq * c[k];
-          m_modal_At->product(m_state.col(j).data(), m_input_term.data(), x);
-        } else {
-          m_modal_At->product(m_state.col(j).data(), m_zero.data(), x);
+      for (Eigen::Index q = 0; q < m; ++q) {
+        const double uq = u(q);
+        for (Eigen::Index r = 0; r < l; ++r) {
+          const double* c = m_Ct.data() + r * n;
+          const Eigen::Index j = q * l + r;
+          m_modal_At->product(m_state.data() + j * n, m_next.data() + j * n, [uq, c](Eigen::Index k) { return uq * c[k]; });
         }
       }
+      for (Eigen::Index j = m * l; j < m_state.cols(); ++j)
+        m_modal_At->product(m_state.data() + j * n, m_next.data() + j * n, [](Eigen::Index) { return 0.0; });
     } else {
       // lazyProduct keeps this small product inline: the general GEMM dispatch
       // costs more than the product itself at these sizes.
@@ -91,7 +88,6 @@ class Recursion {
   const detail::ModalBlockLists* m_modal_At;
   const Eigen::MatrixXd& m_Ct;
   Eigen::MatrixXd m_state, m_next;
-  std::vector<double> m_input_term, m_zero;  // n entries each (modal branch)
   double m_initial_response_peak = 0;
 };
 

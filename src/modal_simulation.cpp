@@ -25,10 +25,14 @@ void simulate_modal_block(const ModalRecursion& modal, const Eigen::Ref<const Ei
   // As simulate_block: column k+1 first receives B_m u[k], then A_m x[k] is added.
   states.col(0) = x;
   if (b > 1) states.rightCols(b - 1).noalias() = modal.Bm * u.topRows(b - 1).transpose();
-  for (Eigen::Index k = 0; k + 1 < b; ++k) modal.Am.product(states.col(k).data(), states.col(k + 1).data(), states.col(k + 1).data());
+  for (Eigen::Index k = 0; k + 1 < b; ++k) {
+    double* next = states.col(k + 1).data();
+    modal.Am.product(states.col(k).data(), next, [next](Eigen::Index i) { return next[i]; });
+  }
   Eigen::VectorXd last = Eigen::VectorXd::Zero(n);
   if (u.cols() > 0) last.noalias() = modal.Bm * u.row(b - 1).transpose();
-  modal.Am.product(states.col(b - 1).data(), last.data(), last.data());
+  double* next = last.data();
+  modal.Am.product(states.col(b - 1).data(), next, [next](Eigen::Index i) { return next[i]; });
   x = last;
 }
 

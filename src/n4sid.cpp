@@ -234,22 +234,26 @@ inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& option
   // are the canonical correlations between the future outputs (with the future
   // inputs projected out) and the past, which the SVC order rule needs whatever
   // weighting determines Gamma_i.
-  auto [cva_root, cva_inv_root] = detail::sqrt_and_inverse_sqrt(oi.yf_perp * oi.yf_perp.transpose(), tol);
-  const Eigen::MatrixXd cva_weighted = cva_inv_root * oi.o_perp;
-  Eigen::MatrixXd weighted, w1_inv;
-  switch (options.weighting) {
-    case SubspaceWeighting::n4sid: weighted = oi.o; break;
-    case SubspaceWeighting::moesp: weighted = oi.o_perp; break;
-    case SubspaceWeighting::cva:
-      weighted = cva_weighted;
-      w1_inv = cva_root;
-      break;
+  // For the N4SID and MOESP weightings the two SVDs are independent: one per core.
+  Eigen::MatrixXd cva_root, w1_inv;
+  Eigen::BDCSVD<Eigen::MatrixXd> svd;
+  auto canonical_correlations = [&] {
+    Eigen::MatrixXd cva_inv_root;
+    std::tie(cva_root, cva_inv_root) = detail::sqrt_and_inverse_sqrt(oi.yf_perp * oi.yf_perp.transpose(), tol);
+    const Eigen::MatrixXd cva_weighted = cva_inv_root * oi.o_perp;
+    if (options.weighting == SubspaceWeighting::cva) svd.compute(cva_weighted, Eigen::ComputeThinU);
+    else res.canonical_correlations = Eigen::BDCSVD<Eigen::MatrixXd>(cva_weighted).singularValues();
+  };
+  if (options.weighting == SubspaceWeighting::cva) {
+    canonical_correlations();
+    w1_inv = cva_root;
+    res.canonical_correlations = svd.singularValues();
+  } else {
+    parallel_invoke(canonical_correlations, [&] {
+      svd.compute(options.weighting == SubspaceWeighting::n4sid ? oi.o : oi.o_perp, Eigen::ComputeThinU);
+    });
   }
-  Eigen::BDCSVD<Eigen::MatrixXd> svd(weighted, Eigen::ComputeThinU);
   res.singular_values = svd.singularValues();
-  res.canonical_correlations = options.weighting == SubspaceWeighting::cva
-                                   ? res.singular_values
-                                   : Eigen::VectorXd(Eigen::BDCSVD<Eigen::MatrixXd>(cva_weighted).singularValues());
   if (options.order > 0) {
     res.order = options.order;
     res.order_rule = "given by the user";

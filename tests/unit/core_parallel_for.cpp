@@ -1,7 +1,8 @@
 // Tests of core/parallel_for.hpp: every index exactly once, nothing for an
 // empty range, the exception of the lowest failing index, after every other
 // index has run; a nested loop runs on its caller's thread; parallel_invoke
-// runs each task once.
+// runs each task once; the kept helper threads serve many loops in a row and
+// loops started from several user threads at once.
 #include <sysid/core/parallel_for.hpp>
 
 #include <gtest/gtest.h>
@@ -18,6 +19,34 @@ TEST(ParallelFor, RunsEveryIndexExactlyOnce) {
   std::vector<std::atomic<int>> calls(1000);
   sysid::parallel_for(calls.size(), [&](std::size_t k) { ++calls[k]; });
   for (std::size_t k = 0; k < calls.size(); ++k) EXPECT_EQ(calls[k].load(), 1) << "index " << k;
+}
+
+TEST(ParallelFor, KeptHelpersServeManyLoopsInARow) {
+  // Thousands of short regions (each a wake-up of the kept helpers): every
+  // index of every loop exactly once, and no region is lost or merged.
+  for (int loop = 0; loop < 2000; ++loop) {
+    std::vector<std::atomic<int>> calls(3);
+    sysid::parallel_for(calls.size(), [&](std::size_t k) { ++calls[k]; });
+    for (std::size_t k = 0; k < calls.size(); ++k) ASSERT_EQ(calls[k].load(), 1) << "loop " << loop << " index " << k;
+  }
+}
+
+TEST(ParallelFor, LoopsFromSeveralUserThreadsAtOnceAllComplete) {
+  // Four user threads each run loops: one at a time gets the kept helpers,
+  // the others start their own threads; every index of every loop runs once.
+  std::vector<std::thread> users;
+  std::atomic<int> wrong{0};
+  for (int u = 0; u < 4; ++u)
+    users.emplace_back([&] {
+      for (int loop = 0; loop < 200; ++loop) {
+        std::vector<std::atomic<int>> calls(16);
+        sysid::parallel_for(calls.size(), [&](std::size_t k) { ++calls[k]; });
+        for (auto& c : calls)
+          if (c.load() != 1) ++wrong;
+      }
+    });
+  for (auto& t : users) t.join();
+  EXPECT_EQ(wrong.load(), 0);
 }
 
 TEST(ParallelFor, AnEmptyRangeRunsNothing) {

@@ -18,11 +18,20 @@
 /// indices on the calling thread, in order (as OpenMP does with nesting off).
 /// The outer loop already occupies the cores; more threads would only compete
 /// for them (diagnose fits candidates in parallel, and each fit may call n4sid,
-/// which has parallel pieces of its own). Starting a thread costs ~30 us here,
-/// so the pieces given to it should be worth well over that.
+/// which has parallel pieces of its own).
+///
+/// Threads: the helpers are started once, on the first parallel_for, and kept
+/// (detail::HelperPool): a parallel region then costs a wake-up, not a thread
+/// start (~30 us on the 2-core CI machine; n4sid has seven regions of 0.1-2 ms).
+/// After a region a helper polls for the next one for ~100 us before it
+/// sleeps. Regions from several user threads at once do not queue: a caller
+/// that finds the helpers busy runs its loop on fresh threads as before.
 #include <algorithm>
 #include <atomic>
+#include <chrono>
+#include <condition_variable>
 #include <cstddef>
+#include <cstdint>
 #include <exception>
 #include <functional>
 #include <mutex>
@@ -35,6 +44,88 @@ namespace sysid {
 namespace detail {
 /// True on a thread while it runs a parallel_for body (see Nesting above).
 inline thread_local bool inside_parallel_for = false;
+
+/// hardware_concurrency() - 1 threads that run one job at a time beside its
+/// caller (see Threads above). Joined at exit.
+class HelperPool {
+ public:
+  static HelperPool& instance() {
+    static HelperPool pool;
+    return pool;
+  }
+
+  std::size_t helpers() const { return m_threads.size(); }
+
+  /// Runs `job` on `count` <= helpers() helpers and on the caller, and returns
+  /// when every one has returned; `job` must not throw. False, with nothing
+  /// run, when another thread's job is using the helpers.
+  bool run(std::size_t count, const std::function<void()>& job) {
+    std::unique_lock<std::mutex> use(m_use, std::try_to_lock);
+    if (!use.owns_lock()) return false;
+    {
+      std::lock_guard<std::mutex> lock(m_mutex);
+      m_job = &job;
+      m_wanted = std::min(count, m_threads.size());
+      m_claimed = m_finished = 0;
+      m_generation.fetch_add(1, std::memory_order_release);
+    }
+    m_wake.notify_all();
+    job();
+    std::unique_lock<std::mutex> lock(m_mutex);
+    m_done.wait(lock, [this] { return m_finished == m_wanted; });
+    m_job = nullptr;
+    return true;
+  }
+
+  HelperPool(const HelperPool&) = delete;
+  HelperPool& operator=(const HelperPool&) = delete;
+
+  ~HelperPool() {
+    {
+      std::lock_guard<std::mutex> lock(m_mutex);
+      m_stop = true;
+      m_generation.fetch_add(1, std::memory_order_release);
+    }
+    m_wake.notify_all();
+    for (std::thread& t : m_threads) t.join();
+  }
+
+ private:
+  HelperPool() {
+    const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+    for (unsigned t = 1; t < cores; ++t) m_threads.emplace_back([this] { serve(); });
+  }
+
+  void serve() {
+    std::uint64_t seen = 0;
+    for (;;) {
+      // Poll briefly (regions often follow each other within ~0.1 ms), then sleep.
+      const auto poll_until = std::chrono::steady_clock::now() + std::chrono::microseconds(100);
+      while (m_generation.load(std::memory_order_acquire) == seen && std::chrono::steady_clock::now() < poll_until)
+        std::this_thread::yield();
+      std::unique_lock<std::mutex> lock(m_mutex);
+      m_wake.wait(lock, [&] { return m_generation.load(std::memory_order_relaxed) != seen; });
+      seen = m_generation.load(std::memory_order_relaxed);
+      if (m_stop) return;
+      if (m_claimed >= m_wanted) continue;
+      ++m_claimed;
+      const std::function<void()>* job = m_job;
+      lock.unlock();
+      (*job)();
+      lock.lock();
+      if (++m_finished == m_wanted) m_done.notify_one();
+    }
+  }
+
+  std::mutex m_use;    // one job at a time
+  std::mutex m_mutex;  // guards everything below but m_generation's polling
+  std::condition_variable m_wake, m_done;
+  std::atomic<std::uint64_t> m_generation{0};
+  const std::function<void()>* m_job = nullptr;
+  std::size_t m_wanted = 0, m_claimed = 0, m_finished = 0;
+  bool m_stop = false;
+  std::vector<std::thread> m_threads;
+};
 }  // namespace detail
 
 inline void parallel_for(std::size_t count, const std::function<void(std::size_t)>& body) {
@@ -61,10 +152,18 @@ inline void parallel_for(std::size_t count, const std::function<void(std::size_t
     }
     detail::inside_parallel_for = was_inside;
   };
-  std::vector<std::thread> threads;
-  for (std::size_t t = 1; t < workers; ++t) threads.emplace_back(work);
-  work();
-  for (auto& t : threads) t.join();
+  if (workers > 1) {
+    detail::HelperPool& pool = detail::HelperPool::instance();
+    const std::function<void()> job = work;
+    if (workers - 1 > pool.helpers() || !pool.run(workers - 1, job)) {
+      std::vector<std::thread> threads;
+      for (std::size_t t = 1; t < workers; ++t) threads.emplace_back(work);
+      work();
+      for (auto& t : threads) t.join();
+    }
+  } else {
+    work();
+  }
   if (failure) std::rethrow_exception(failure);
 }
 
