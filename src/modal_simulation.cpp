@@ -13,7 +13,9 @@ std::optional<ModalRecursion> modal_recursion(const StateSpace& sys, double cond
   modal.Am = ModalBlockLists(form->blocks, false);
   modal.T = std::move(form->T);
   modal.T_lu.compute(modal.T);
-  modal.Bm = modal.T_lu.solve(sys.B);
+  // An input-free model's B (n x 0) has no data: solving for it would bind a
+  // reference to a null pointer (found by UBSan).
+  modal.Bm = sys.B.cols() > 0 ? Eigen::MatrixXd(modal.T_lu.solve(sys.B)) : Eigen::MatrixXd(sys.order(), 0);
   modal.Cm = sys.C * modal.T;
   return modal;
 }

@@ -30,7 +30,8 @@ MatrixXd reference_output(const sysid::StateSpace& s, const MatrixXd& u, VectorX
   MatrixXd y(u.rows(), s.outputs());
   if (states) states->resize(u.rows(), s.order());
   for (Eigen::Index k = 0; k < u.rows(); ++k) {
-    const VectorXd uk = u.row(k).transpose();
+    // An input-free model's u has no data (null pointer): no row of it is formed.
+    const VectorXd uk = u.cols() > 0 ? VectorXd(u.row(k).transpose()) : VectorXd(0);
     if (states) states->row(k) = x.transpose();
     y.row(k) = (s.C * x + s.D * uk).transpose();
     x = s.A * x + s.B * uk;

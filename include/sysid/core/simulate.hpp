@@ -8,7 +8,8 @@
 /// matrix product (B U^T), the state recursion then adds A x[k] column by column
 /// in place, and the outputs of the block follow from one more product
 /// (Y = X^T C^T + U D^T). All heavy work is GEMM; the only per-sample work is one
-/// n x n GEMV into preallocated storage (no heap allocation per step).
+/// n x n GEMV into preallocated storage (no heap allocation per step), or, in
+/// simulate_blockwise_modal, one 1x1 or 2x2 block per mode.
 /// simulate() processes the record in blocks of kSimulateBlock samples with a
 /// fixed n x block workspace, so its memory is O(n * block + N * l) whatever N is.
 ///
@@ -21,10 +22,10 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <optional>
-#include <utility>
-#include <vector>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace sysid {
 
@@ -97,7 +98,9 @@ void simulate_in_blocks(const Eigen::Ref<const Eigen::MatrixXd>& u, const Eigen:
   Eigen::MatrixXd states(n, std::min(N, kSimulateBlock)), y(std::min(N, kSimulateBlock), C.rows());
   for (Eigen::Index k0 = 0; k0 < N; k0 += kSimulateBlock) {
     const Eigen::Index b = std::min(kSimulateBlock, N - k0);
-    const Eigen::Ref<const Eigen::MatrixXd> ub = u.middleRows(k0, b);
+    // An input-free model (m = 0) has an empty u whose data pointer is null:
+    // offsetting it would be undefined behaviour, and any rows will do.
+    const Eigen::Ref<const Eigen::MatrixXd> ub = u.middleRows(u.cols() > 0 ? k0 : 0, b);
     Eigen::Ref<Eigen::MatrixXd> xb = states.leftCols(b);
     recursion(ub, x, xb);
     Eigen::Ref<Eigen::MatrixXd> yb = y.topRows(b);
