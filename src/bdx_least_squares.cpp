@@ -56,8 +56,7 @@ class Recursion {
   void advance(const Row& u) {
     const Eigen::Index n = m_state.rows(), l = m_Ct.cols(), m = u.size();
     if (m_modal_At) {
-      // Psi_q^T columns: A_m^T psi + u_q c_r (c_r a column of C^T, formed
-      // first: the same sum in the same order as the dense branch's); Lambda^T
+      // Psi_q^T columns: A_m^T psi + u_q c_r (c_r a column of C^T), Lambda^T
       // columns: A_m^T lambda. One pass over the state.
       for (Eigen::Index q = 0; q < m; ++q) {
         const double uq = u(q);
@@ -150,7 +149,7 @@ void accumulate_piece(const Coordinates& co, const Experiment& ex, Eigen::Index 
     rec.initial_response_negligible();  // keeps the running peak a single pass would have
     rec.advance(ex.u.row(t));
   }
-  // Rows of `block` samples are formed together and handed to the QRs at once,
+  // Rows of `block` samples are formed together and handed to the QRs or Gram matrices at once,
   // into buffers reused for every block (no allocation per sample).
   const Eigen::Index block = 256;
   RowBuffer rows(block * l, p + 1), reduced_rows(block * l, input_columns + 1);

@@ -9,7 +9,6 @@ std::optional<ModalRecursion> modal_recursion(const StateSpace& sys, double cond
   std::optional<RealModalForm> form = conditioned_real_modal_form(sys.A, condition_limit, condition);
   if (!form) return std::nullopt;
   ModalRecursion modal;
-  modal.condition = condition;
   modal.Am = ModalBlockLists(form->blocks, false);
   modal.T = std::move(form->T);
   modal.T_lu.compute(modal.T);

@@ -117,7 +117,6 @@ struct ModalRecursion {
   ModalBlockLists Am;
   Eigen::MatrixXd T, Bm, Cm;
   Eigen::PartialPivLU<Eigen::MatrixXd> T_lu;
-  double condition = 0;  ///< cond(T)
 };
 
 /// The modal recursion of `sys`, or std::nullopt when A has no real modal form
