@@ -185,7 +185,10 @@ inline void select_order_when_svc_finds_none(SubspaceCore& res, int top, Eigen::
                       "; compare orders on held-out data with --order LO:HI";
 }
 
-inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& options) {
+/// `low_passed`: the data were low-passed for decimation (the top of their band
+/// is empty), so the block-Hankel compression starts at its double-double Gram
+/// matrix (BlockHankelOptions::double_gram_first).
+inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& options, bool low_passed) {
   const Eigen::Index m = data.inputs(), l = data.outputs();
   SubspaceCore res;
   // Horizon.
@@ -209,6 +212,7 @@ inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& option
   BlockHankelOptions ho;
   ho.horizon = horizon;
   ho.route = options.route;
+  ho.double_gram_first = !low_passed;
   const BlockHankelCompression hc = compress_block_hankel(data, ho);
   res.route_used = hc.route_used;
   res.gram_condition_estimate = hc.gram_condition_estimate;
@@ -418,13 +422,13 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
   detail::SubspaceCore core;
   // The order is chosen at a horizon sized for max_order; the model of that
   // order is then identified at the horizon sized for it (unless the user fixed one).
-  auto identify = [&options](const IoData& d) {
-    detail::SubspaceCore c = detail::subspace_core(d, options);
+  auto identify = [&options](const IoData& d, bool low_passed) {
+    detail::SubspaceCore c = detail::subspace_core(d, options, low_passed);
     if (options.order == 0 && options.horizon == 0 &&
         detail::automatic_horizon(c.order, options.max_order, d.outputs()) != c.horizon) {
       N4sidOptions second = options;
       second.order = c.order;
-      detail::SubspaceCore fixed = detail::subspace_core(d, second);
+      detail::SubspaceCore fixed = detail::subspace_core(d, second, low_passed);
       fixed.order_rule = c.order_rule + " at horizon " + std::to_string(c.horizon);
       fixed.singular_values = c.singular_values;
       fixed.canonical_correlations = c.canonical_correlations;
@@ -434,14 +438,14 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
     return c;
   };
   if (res.decimation > 1) {
-    core = identify(decimated);
+    core = identify(decimated, true);
     decimated = IoData();  // the rest runs at the original rate: free the copy
     core.A = detail::principal_root(core.A, res.decimation);
     res.warnings.push_back("n4sid: the inputs excite only 0.." + format_number(band_hi) + " Hz of " + format_number(nyquist) +
                            " Hz: identified on a grid decimated by " + std::to_string(res.decimation) +
                            " (A mapped back by its principal root, B, D, x0 fitted at the original rate)");
   } else {
-    core = identify(data);
+    core = identify(data, false);
   }
   res.singular_values = core.singular_values;
   res.canonical_correlations = core.canonical_correlations;

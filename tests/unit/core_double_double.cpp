@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 #include <random>
 #include <vector>
 
@@ -106,6 +107,50 @@ TEST(DoubleDouble, OperationsAreAccurateToAFewUnitsOfTwoToTheMinus106) {
   EXPECT_LT(worst_sqrt, 8 * u2);  // relative error of r^2, twice that of r
   EXPECT_EQ(sqrt(DoubleDouble(0.0)).hi, 0.0);
   EXPECT_TRUE(std::isnan(sqrt(DoubleDouble(-1.0)).hi));
+}
+
+TEST(DoubleDouble, DotProductIsAccurateToTheOrderOfNTimesTwoToTheMinus106OfItsTerms) {
+  // Against binary128 sums of the exact products: error <= (n + 4) u^2 sum |x y|
+  // (file comment of dot), for lengths around the four partial sums, with
+  // terms that cancel to a small fraction of their sum.
+  std::mt19937_64 rng(43);
+  const double u2 = std::ldexp(1.0, -106);
+  double worst = 0;
+  for (Eigen::Index n : {0, 1, 2, 3, 4, 5, 7, 8, 9, 33, 80, 257}) {
+    for (int trial = 0; trial < 50; ++trial) {
+      std::vector<DoubleDouble> x(static_cast<std::size_t>(n)), y(static_cast<std::size_t>(n));
+      quad exact = 0, magnitude = 0;
+      for (std::size_t p = 0; p < x.size(); ++p) {
+        x[p] = random_double_double(rng);
+        y[p] = random_double_double(rng);
+        const quad term = as_quad(x[p]) * as_quad(y[p]);
+        exact += term;
+        magnitude += term < 0 ? -term : term;
+      }
+      if (n > 1 && trial % 2 == 1) {  // cancel most of the sum: the last term takes it back
+        quad rest = 0;  // summed afresh: exact minus the old last term would carry its rounding
+        for (std::size_t p = 0; p + 1 < x.size(); ++p) rest += as_quad(x[p]) * as_quad(y[p]);
+        const double target = -static_cast<double>(rest / as_quad(y.back())) * (1.0 + 1e-9);
+        x.back() = DoubleDouble(target);
+        exact = rest + as_quad(x.back()) * as_quad(y.back());
+        magnitude = 0;
+        for (std::size_t p = 0; p < x.size(); ++p) {
+          const quad term = as_quad(x[p]) * as_quad(y[p]);
+          magnitude += term < 0 ? -term : term;
+        }
+      }
+      const DoubleDouble got = dot(x.data(), y.data(), n);
+      if (n == 0) {
+        EXPECT_EQ(got.hi, 0.0);
+        continue;
+      }
+      const quad diff = as_quad(got) - exact;
+      const double error = static_cast<double>((diff < 0 ? -diff : diff) / magnitude);
+      EXPECT_LE(error, static_cast<double>(n + 4) * u2) << "n = " << n << ", trial " << trial;
+      worst = std::max(worst, error / (static_cast<double>(n + 4) * u2));
+    }
+  }
+  std::cout << "dot: worst error / ((n + 4) u^2 sum |x y|) = " << worst << "\n";
 }
 
 TEST(DoubleDoubleCholesky, FactorsAGramMatrixThatDoubleCannot) {

@@ -139,6 +139,36 @@ TEST(BlockHankel, BandLimitedDataTakeTheDoubleDoubleRouteAndBeatQrAgainstARefere
   EXPECT_LT(error_dd, 1e-9) << "cond(H) " << cond_h;
   std::cout << "cond(H) " << cond_h << ": relative error of R against the long-double reference " << error_dd
             << " (double-double Gram), " << error_qr << " (Householder QR)\n";
+  // Told the data are band-limited, the automatic route skips the double
+  // attempt: same route, same R (the double-double Gram matrix is formed the same way).
+  opt.route = HankelRoute::automatic;
+  opt.double_gram_first = false;
+  const BlockHankelCompression skipped = compress_block_hankel(data, opt);
+  EXPECT_EQ(skipped.route_used, HankelRoute::cholesky_double_double);
+  EXPECT_EQ(skipped.R, automatic.R);
+}
+
+TEST(BlockHankel, WithoutTheDoubleAttemptWellConditionedDataStillGetAnAccurateR) {
+  // White-noise data, where the automatic route takes the double Gram matrix:
+  // with double_gram_first off they go to double-double, whose R is at least as
+  // close to the QR's.
+  const IoData data = noise_data(2000, 2, 1, 31);
+  BlockHankelOptions opt;
+  opt.horizon = 6;
+  const BlockHankelCompression first = compress_block_hankel(data, opt);
+  ASSERT_EQ(first.route_used, HankelRoute::cholesky);
+  opt.double_gram_first = false;
+  const BlockHankelCompression skipped = compress_block_hankel(data, opt);
+  EXPECT_EQ(skipped.route_used, HankelRoute::cholesky_double_double);
+  opt.route = HankelRoute::qr;
+  const BlockHankelCompression qr = compress_block_hankel(data, opt);
+  const double error_skipped = (skipped.R - qr.R).norm() / qr.R.norm();
+  const double error_first = (first.R - qr.R).norm() / qr.R.norm();
+  EXPECT_LT(error_skipped, 1e-13);
+  EXPECT_LE(error_skipped, 2 * error_first + 1e-15);
+  // A forced route ignores the flag.
+  opt.route = HankelRoute::cholesky;
+  EXPECT_EQ(compress_block_hankel(data, opt).route_used, HankelRoute::cholesky);
 }
 
 TEST(BlockHankel, TooFewSamplesIsAPreconditionError) {

@@ -122,6 +122,34 @@ inline DoubleDouble sqrt(const DoubleDouble& x) {
   return fast_two_sum(s, residual / (2.0 * s));
 }
 
+/// sum_p x[p] y[p] of double-double vectors, as a double-double.
+///
+/// Method: Ogita, Rump & Oishi's Dot2 (SIAM J. Sci. Comput. 26 (2005) 1955,
+/// Algorithm 5.3) on the hi parts (exact products by two_prod, running sums by
+/// two_sum, their errors summed in double), the cross terms x.hi y.lo + x.lo y.hi
+/// added to the error sum (x.lo y.lo, ~u^2 of a term, is dropped); four
+/// independent partial sums, joined at the end in double-double. Error about
+/// (n + 4) u^2 sum |x_p y_p|, the order of n accumulating double-double
+/// multiply-adds (3u^2 of the running sum each), but the partial sums carry no
+/// renormalisation from one term to the next: the four chains overlap in the
+/// pipeline where a double-double accumulation is one long dependency.
+inline DoubleDouble dot(const DoubleDouble* x, const DoubleDouble* y, Eigen::Index n) {
+  constexpr int lanes = 4;
+  double hi[lanes] = {0.0, 0.0, 0.0, 0.0}, err[lanes] = {0.0, 0.0, 0.0, 0.0};
+  auto term = [&](Eigen::Index p, int lane) {
+    const DoubleDouble product = two_prod(x[p].hi, y[p].hi);
+    const DoubleDouble sum = two_sum(hi[lane], product.hi);
+    hi[lane] = sum.hi;
+    err[lane] += (product.lo + sum.lo) + (x[p].hi * y[p].lo + x[p].lo * y[p].hi);
+  };
+  Eigen::Index p = 0;
+  for (; p + lanes <= n; p += lanes)
+    for (int lane = 0; lane < lanes; ++lane) term(p + lane, lane);
+  for (int lane = 0; p < n; ++p, ++lane) term(p, lane);
+  const DoubleDouble joined = (DoubleDouble(hi[0]) + DoubleDouble(hi[1])) + (DoubleDouble(hi[2]) + DoubleDouble(hi[3]));
+  return joined + DoubleDouble((err[0] + err[1]) + (err[2] + err[3]));
+}
+
 /// A matrix of double-double values kept as two double matrices: value = hi + lo
 /// (hi alone is the matrix rounded to double).
 struct DoubleDoubleMatrix {
