@@ -66,31 +66,9 @@ LogOptions make_log_options(const LogArgs& args, std::vector<std::string> inputs
 }
 
 LoadedLog load_log(const std::string& path, const LogOptions& options) {
-  const CsvTable table = read_csv(path);
   LoadedLog out;
-  out.data = log_from_table(table, options);
-  if (options.time_column.empty()) return out;
-  const Eigen::Index tc = table.column(options.time_column);
-  if (tc < 0) return out;
-  // The reader drops only leading and trailing rows (drop policy): the first kept
-  // row is the first whose selected cells are all finite.
-  Eigen::Index first = 0;
-  if (options.nan_policy == NanPolicy::drop_rows) {
-    std::vector<Eigen::Index> cols{tc};
-    for (const auto* names : {&options.inputs, &options.outputs})
-      for (const auto& n : *names) cols.push_back(table.column(n));
-    auto row_ok = [&](Eigen::Index r) {
-      for (const Eigen::Index c : cols)
-        if (c >= 0 && !std::isfinite(table.values(r, c))) return false;
-      return true;
-    };
-    while (first < table.values.rows() && !row_ok(first)) ++first;
-  }
-  const Eigen::Index n = out.data.experiments.front().samples();
-  out.time = table.values.col(tc).segment(first, n);
-  // Stamps repaired by the interpolate policy: the grid they must lie on.
-  for (Eigen::Index k = 0; k < n; ++k)
-    if (!std::isfinite(out.time(k))) out.time(k) = out.time(0) + static_cast<double>(k) * out.data.Ts;
+  out.data = log_from_table(read_csv(path), options, &out.time);
+  if (out.time.size() == 0) return out;
   out.time_name = options.time_column;
   return out;
 }

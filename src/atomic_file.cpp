@@ -196,7 +196,10 @@ std::string read_whole_file(const std::string& path) {
     int fd;
     ~Closer() { ::close(fd); }
   } closer{fd};
+  return read_whole_descriptor(fd, path);
+}
 
+std::string read_whole_descriptor(int fd, const std::string& path) {
   struct stat st {};
   if (::fstat(fd, &st) != 0) {
     const int err = errno;

@@ -15,6 +15,7 @@
 #include "sysid/core/format_number.hpp"
 #include "sysid/core/median.hpp"
 #include "sysid/io/atomic_file.hpp"
+#include "sysid/io/mapped_file.hpp"
 
 namespace sysid {
 namespace {
@@ -49,7 +50,9 @@ inline bool parse_number(const char* b, const char* e, double& v) {
 
 class CsvParser {
  public:
-  CsvParser(const char* begin, const char* end, const std::string& source) : m_p(begin), m_end(end), m_source(source) {
+  /// `file`, when given, holds [begin, end): the parser releases the text behind it as it goes.
+  CsvParser(const char* begin, const char* end, const std::string& source, MappedFile* file = nullptr)
+      : m_p(begin), m_end(end), m_source(source), m_file(file) {
     if (std::string_view(m_p, static_cast<std::size_t>(m_end - m_p)).starts_with(k_utf8_bom)) m_p += k_utf8_bom.size();
   }
 
@@ -71,16 +74,25 @@ class CsvParser {
     // blank or comment lines among the data the bound is exact and no copy is made.
     const auto rest = static_cast<std::size_t>(m_end - m_p);
     std::size_t newlines = 0;
-    for (const char* q = m_p; (q = static_cast<const char*>(std::memchr(q, '\n', static_cast<std::size_t>(m_end - q))));
-         ++q)
-      ++newlines;
+    for (const char* chunk = m_p; chunk < m_end; chunk += std::min<std::size_t>(kReleaseBytes, m_end - chunk)) {
+      const char* chunk_end = chunk + std::min<std::size_t>(kReleaseBytes, m_end - chunk);
+      for (const char* q = chunk;
+           (q = static_cast<const char*>(std::memchr(q, '\n', static_cast<std::size_t>(chunk_end - q)))); ++q)
+        ++newlines;
+      if (m_file) m_file->release(chunk, chunk_end);
+    }
     const std::size_t line_bound = newlines + (rest > 0 && m_end[-1] != '\n' ? 1 : 0);
     m_capacity = static_cast<Eigen::Index>(std::min(line_bound, rest / m_columns + 1));
     table.values.resize(m_capacity, static_cast<Eigen::Index>(m_columns));
     table.line_numbers.reserve(static_cast<std::size_t>(m_capacity));
 
     Eigen::Index rows = 0;
+    const char* released = m_p;
     while (next_content_line(b, e)) {
+      if (m_file && b - released >= kReleaseBytes) {
+        m_file->release(released, b);
+        released = b;
+      }
       if (rows == m_capacity) {  // cannot happen (the bound is an upper bound); kept for safety
         m_capacity = 2 * m_capacity + 1;
         table.values.conservativeResize(m_capacity, Eigen::NoChange);
@@ -258,6 +270,9 @@ class CsvParser {
   const char* m_p;
   const char* m_end;
   const std::string& m_source;
+  MappedFile* m_file = nullptr;
+  /// Text released in steps of this many bytes (a step costs one madvise).
+  static constexpr std::ptrdiff_t kReleaseBytes = 8 << 20;
   long m_line = 0;
   Delimiter m_delimiter = Delimiter::comma;
   std::size_t m_columns = 0;
@@ -284,11 +299,19 @@ CsvTable read_csv_string(const std::string& text, const std::string& source_name
 }
 
 CsvTable read_csv(const std::string& path) {
-  const std::string text = read_whole_file(path);
-  return read_csv_string(text, path);
+  MappedFile file(path);
+  const std::string_view text = file.text();
+  return CsvParser(text.data(), text.data() + text.size(), path, &file).parse();
 }
 
-IoData log_from_table(const CsvTable& table, const LogOptions& options) {
+namespace {
+
+/// log_from_table's work. `owned_values`, when given, are the table's values
+/// moved out of it (`table` then supplies only names, lines and source): the
+/// selected output columns are gathered at its front and it becomes y itself, so
+/// the log costs one copy of the inputs (and time) instead of all its columns.
+IoData make_log(const CsvTable& table, Eigen::MatrixXd* owned_values, const LogOptions& options,
+                Eigen::VectorXd* time_stamps) {
   if (options.inputs.empty() && options.outputs.empty())
     throw std::invalid_argument("read_log: need at least one input or output column (inputs.size() + outputs.size() >= 1)");
   if (options.ts && !(*options.ts > 0.0 && std::isfinite(*options.ts)))
@@ -310,33 +333,52 @@ IoData log_from_table(const CsvTable& table, const LogOptions& options) {
       seen.push_back(name);
     }
 
-  // One copy of the selected columns, straight into the matrices handed to IoData.
-  const Eigen::Index n_rows = table.values.rows();
+  // The selected columns, straight into the matrices handed to IoData.
+  const Eigen::MatrixXd& values = owned_values ? *owned_values : table.values;
+  const Eigen::Index n_rows = values.rows();
   const auto m = static_cast<Eigen::Index>(options.inputs.size());
   const auto l = static_cast<Eigen::Index>(options.outputs.size());
-  Eigen::MatrixXd u(n_rows, m), y(n_rows, l);
+  std::vector<Eigen::Index> u_cols, y_cols;
+  for (const auto& name : options.inputs) u_cols.push_back(find_column(name));
+  for (const auto& name : options.outputs) y_cols.push_back(find_column(name));
+  const Eigen::Index time_col = options.time_column.empty() ? -1 : table.column(options.time_column);
+  const bool time_is_signal = std::find(u_cols.begin(), u_cols.end(), time_col) != u_cols.end() ||
+                              std::find(y_cols.begin(), y_cols.end(), time_col) != y_cols.end();
   Eigen::VectorXd t;
+  if (time_col >= 0 && !time_is_signal) t = values.col(time_col);
+  Eigen::MatrixXd u(n_rows, m), y;
+  for (Eigen::Index j = 0; j < m; ++j) u.col(j) = values.col(u_cols[static_cast<std::size_t>(j)]);
+  if (owned_values) {
+    // Column swaps that bring the output columns, in order, to the front
+    // (position[c]: where file column c is now), then the tail is cut off in place.
+    Eigen::MatrixXd& v = *owned_values;
+    std::vector<Eigen::Index> position(static_cast<std::size_t>(v.cols())), holds(position.size());
+    for (std::size_t c = 0; c < position.size(); ++c) position[c] = holds[c] = static_cast<Eigen::Index>(c);
+    for (Eigen::Index i = 0; i < l; ++i) {
+      const Eigen::Index from = position[static_cast<std::size_t>(y_cols[static_cast<std::size_t>(i)])];
+      if (from == i) continue;
+      v.col(i).swap(v.col(from));
+      std::swap(holds[static_cast<std::size_t>(i)], holds[static_cast<std::size_t>(from)]);
+      position[static_cast<std::size_t>(holds[static_cast<std::size_t>(i)])] = i;
+      position[static_cast<std::size_t>(holds[static_cast<std::size_t>(from)])] = from;
+    }
+    v.conservativeResize(Eigen::NoChange, l);
+    y = std::move(v);
+  } else {
+    y.resize(n_rows, l);
+    for (Eigen::Index i = 0; i < l; ++i) y.col(i) = values.col(y_cols[static_cast<std::size_t>(i)]);
+  }
   // Every selected column as (data, file column), so the NaN policy treats inputs,
   // outputs and time alike.
   std::vector<std::pair<double*, Eigen::Index>> sel;
-  for (Eigen::Index j = 0; j < m; ++j) {
-    const Eigen::Index c = find_column(options.inputs[static_cast<std::size_t>(j)]);
-    u.col(j) = table.values.col(c);
-    sel.emplace_back(u.col(j).data(), c);
-  }
-  for (Eigen::Index i = 0; i < l; ++i) {
-    const Eigen::Index c = find_column(options.outputs[static_cast<std::size_t>(i)]);
-    y.col(i) = table.values.col(c);
-    sel.emplace_back(y.col(i).data(), c);
-  }
-  const Eigen::Index time_col = options.time_column.empty() ? -1 : table.column(options.time_column);
+  for (Eigen::Index j = 0; j < m; ++j) sel.emplace_back(u.col(j).data(), u_cols[static_cast<std::size_t>(j)]);
+  for (Eigen::Index i = 0; i < l; ++i) sel.emplace_back(y.col(i).data(), y_cols[static_cast<std::size_t>(i)]);
   std::size_t time_sel = sel.size();  // index into sel of the time column
   if (time_col >= 0) {
     const auto it = std::find_if(sel.begin(), sel.end(), [&](const auto& s) { return s.second == time_col; });
     if (it != sel.end()) {
       time_sel = static_cast<std::size_t>(it - sel.begin());  // also selected as a signal: one copy serves both
     } else {
-      t = table.values.col(time_col);
       sel.emplace_back(t.data(), time_col);
     }
   }
@@ -447,6 +489,12 @@ IoData log_from_table(const CsvTable& table, const LogOptions& options) {
     throw DataError(src, 0, 0, "no time column '" + options.time_column + "' and no --ts given");
   }
 
+  // The kept rows' time stamps (repaired by the interpolate policy), before the
+  // rows are cut (sel points into u, y and t as they are now).
+  if (time_stamps) {
+    if (time_col >= 0) *time_stamps = Eigen::Map<const Eigen::VectorXd>(sel[time_sel].first + first, n);
+    else time_stamps->resize(0);
+  }
   if (first > 0 || last < n_rows) {
     // A time series has no input columns: Eigen would form the block of that
     // empty matrix as its null data pointer plus an offset (undefined behaviour).
@@ -458,6 +506,15 @@ IoData log_from_table(const CsvTable& table, const LogOptions& options) {
     keep_rows(y);
   }
   return IoData(std::move(u), std::move(y), ts, options.inputs, options.outputs, src);
+}
+
+}  // namespace
+
+IoData log_from_table(const CsvTable& table, const LogOptions& options) { return make_log(table, nullptr, options, nullptr); }
+
+IoData log_from_table(CsvTable&& table, const LogOptions& options, Eigen::VectorXd* time_stamps) {
+  Eigen::MatrixXd values = std::move(table.values);
+  return make_log(table, &values, options, time_stamps);
 }
 
 IoData read_log(const std::string& path, const LogOptions& options) { return log_from_table(read_csv(path), options); }

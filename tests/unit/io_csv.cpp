@@ -1,6 +1,7 @@
 #include "sysid/io/csv.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -11,8 +12,10 @@
 #include <functional>
 #include <limits>
 #include <random>
+#include <thread>
 
 #include "sysid/core/errors.hpp"
+#include "sysid/io/mapped_file.hpp"
 
 namespace test_unit_io_csv {
 
@@ -444,6 +447,102 @@ TEST_F(IoCsvFiles, ReadLogsBuildsSeparateExperiments) {
   // A bad second file reports its own name.
   const std::string bad = write("bad.csv", "t,u1,y\n0,1,2\n0.01,x,3\n");
   expect_data_error([&] { sysid::read_logs({a, bad}, o); }, bad, 3, 2, "found 'x'");
+}
+
+TEST(IoCsv, ConsumingTheTableGivesTheSameLogAndTheTimeStamps) {
+  // Output columns in every order relative to the file (the in-place gathering
+  // swaps columns), the time column also selected as a signal, and the NaN
+  // policies that trim or repair rows.
+  const std::string text =
+      "t,a,b,c,d\n"
+      "0,1,2,3,4\n"
+      "0.1,5,nan,7,8\n"
+      "0.2,9,10,11,nan\n"
+      "nan,13,14,15,16\n"
+      "0.4,17,18,19,20\n"
+      "0.5,21,22,23,24\n";
+  struct Case {
+    std::vector<std::string> inputs, outputs;
+    NanPolicy policy;
+  };
+  const std::vector<Case> cases = {
+      {{"a"}, {"c", "b"}, NanPolicy::interpolate},  {{"c"}, {"b", "a"}, NanPolicy::interpolate},
+      {{}, {"d", "c", "b", "a"}, NanPolicy::interpolate}, {{"b"}, {"a", "t"}, NanPolicy::interpolate},
+      {{"a"}, {"c"}, NanPolicy::drop_rows},
+  };
+  for (const Case& c : cases) {
+    LogOptions o;
+    o.inputs = c.inputs;
+    o.outputs = c.outputs;
+    o.nan_policy = c.policy;
+    std::string body = text;
+    if (c.policy == NanPolicy::drop_rows) body = "t,a,b,c,d\n0,1,2,3,4\n0.1,5,6,7,8\n0.2,9,nan,11,12\n";
+    const CsvTable table = parse(body);
+    const sysid::IoData copied = sysid::log_from_table(table, o);
+    Eigen::VectorXd stamps;
+    const sysid::IoData consumed = sysid::log_from_table(parse(body), o, &stamps);
+    const auto& a = copied.experiments.front();
+    const auto& b = consumed.experiments.front();
+    EXPECT_EQ(a.u, b.u);
+    EXPECT_EQ(a.y, b.y);
+    EXPECT_EQ(copied.Ts, consumed.Ts);
+    EXPECT_EQ(consumed.output_names, c.outputs);
+    ASSERT_EQ(stamps.size(), b.samples());
+    for (Eigen::Index k = 0; k < stamps.size(); ++k) EXPECT_NEAR(stamps(k), stamps(0) + k * consumed.Ts, 1e-12);
+  }
+  // Outputs gathered from file columns 3, 1, 4 keep their values.
+  LogOptions o;
+  o.outputs = {"c", "a", "d"};
+  o.ts = 0.1;
+  o.time_column.clear();
+  const sysid::IoData d = sysid::log_from_table(parse("t,a,b,c,d\n0,1,2,3,4\n1,5,6,7,8\n"), o);
+  Eigen::MatrixXd want(2, 3);
+  want << 3, 1, 4, 7, 5, 8;
+  EXPECT_EQ(d.experiments.front().y, want);
+}
+
+TEST_F(IoCsvFiles, LargeFileReadThroughTheMappingEqualsTheInMemoryParse) {
+  // ~22 MB: both passes release the text behind them several times (8 MB steps);
+  // the released pages are read again only if touched, so the result must be
+  // the in-memory parse's bit for bit, and an error near the end must still
+  // name its line and column.
+  const std::string text = "# comment before the header\n" + make_log(600000, 0.001) + "\n# trailing comment\n";
+  ASSERT_GT(text.size(), 20u << 20);
+  const std::string path = write("big.csv", text);
+  {
+    sysid::MappedFile file(path);
+    EXPECT_TRUE(file.mapped());
+    EXPECT_EQ(file.text(), text);
+    file.release(file.text().data() + 100, file.text().data() + file.text().size() / 2);  // released pages read back unchanged
+    EXPECT_EQ(file.text(), text);
+  }
+  const CsvTable from_file = sysid::read_csv(path);
+  const CsvTable from_memory = parse(text);
+  ASSERT_EQ(from_file.values.rows(), 600000);
+  EXPECT_EQ(from_file.values, from_memory.values);
+  EXPECT_EQ(from_file.line_numbers, from_memory.line_numbers);
+  EXPECT_EQ(from_file.header_line, 2);
+  EXPECT_EQ(from_file.values(599999, 3), 3.0 * 599999 + 1);
+
+  std::string bad = text;
+  const std::size_t at = bad.rfind("\n", bad.size() - 30);  // the last data line
+  bad.replace(at + 1, 1, "x");
+  const std::string bad_path = write("bad_big.csv", bad);
+  expect_data_error([&] { sysid::read_csv(bad_path); }, bad_path, 600002, 1, "expected a number");
+}
+
+TEST_F(IoCsvFiles, EmptyFileFifoAndDirectoryGiveTheUsualAnswers) {
+  const std::string empty = write("empty.csv", "");
+  expect_data_error([&] { sysid::read_csv(empty); }, empty, 0, 0, "empty file");
+  expect_data_error([&] { sysid::read_csv(m_dir.string()); }, m_dir.string(), 0, 0, "directory");
+  // A FIFO cannot be mapped: it is read whole, as before.
+  const std::string fifo = (m_dir / "pipe.csv").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::thread writer([&] { std::ofstream(fifo) << "t,y\n0,1\n1,2\n"; });
+  const CsvTable t = sysid::read_csv(fifo);
+  writer.join();
+  ASSERT_EQ(t.values.rows(), 2);
+  EXPECT_EQ(t.values(1, 1), 2.0);
 }
 
 TEST_F(IoCsvFiles, WriteCsvRoundTripsThroughTheFile) {

@@ -39,6 +39,10 @@ void write_file_atomically(const std::string& path, const std::string& contents)
 /// directory.
 std::string read_whole_file(const std::string& path);
 
+/// read_whole_file on a descriptor already open for reading (left open), e.g. a
+/// FIFO that must not be opened twice; `path` names it in messages.
+std::string read_whole_descriptor(int fd, const std::string& path);
+
 /// Purpose: refuse an output path that is one of the inputs, before any work is
 /// done (e.g. `sysid simulate ... log.csv --out log.csv`).
 ///
