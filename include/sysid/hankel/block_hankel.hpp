@@ -35,10 +35,10 @@
 ///    where this route is 5x faster than qr and its R 800x closer to a
 ///    long-double reference).
 ///  automatic: cholesky when it succeeds with an estimated cond(G) within
-///  `max_gram_condition` (skipped when `double_gram_first` is off), else cholesky_double_double when G is positive
-///  definite in double-double with every pivot ratio >= `min_pivot_ratio`,
-///  else qr (data rank deficient to double precision, where the QR's R is
-///  still well defined).
+///  `max_gram_condition` (not tried when `double_gram_first` is off), else
+///  cholesky_double_double when G is positive definite in double-double with
+///  every pivot ratio >= `min_pivot_ratio`, else qr (data rank deficient to
+///  double precision, where the QR's R is still well defined).
 /// Several experiments add their Gram matrices (resp. continue the QR): no block
 /// column ever straddles two experiments, so there is no seam.
 ///
