@@ -12,7 +12,9 @@
 //  - format_csv -> read_csv_string gives back the same names and the same values
 //    bit for bit (the round trip csv.hpp promises), whenever format_csv accepts
 //    the names;
-//  - a log that reads has Ts > 0 and finite, finite samples, and the channels asked for.
+//  - a log that reads has Ts > 0 and finite, finite samples, and the channels asked for;
+//  - the consuming log_from_table (CsvTable&&) gives the same log bit for bit, one
+//    time stamp per sample when a time column is used, or the same error.
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -120,9 +122,28 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* bytes, std::size_t siz
   check_round_trip(table);
 
   const sysid::LogOptions options = make_options(bytes[0], bytes[1], table);
+  // The copying and the consuming readers must agree: the same log, bit for bit,
+  // or the same error.
+  std::optional<sysid::IoData> copied;
+  std::string copied_error;
   try {
-    check_log(sysid::log_from_table(table, options), options, table);
-  } catch (const sysid::DataError&) {
+    copied = sysid::log_from_table(table, options);
+    check_log(*copied, options, table);
+  } catch (const sysid::DataError& e) {
+    copied_error = e.what();
+  }
+  try {
+    Eigen::VectorXd stamps;
+    const sysid::IoData consumed = sysid::log_from_table(sysid::CsvTable(table), options, &stamps);
+    check(copied.has_value(), "consuming log_from_table accepts what the copying one refuses");
+    const auto& a = copied->experiments.front();
+    const auto& b = consumed.experiments.front();
+    check(sysid::fuzz::same_bits(a.u, b.u) && sysid::fuzz::same_bits(a.y, b.y) && copied->Ts == consumed.Ts,
+          "consuming log_from_table: the same log, bit for bit");
+    const bool time_column_used = !options.time_column.empty() && table.column(options.time_column) >= 0;
+    check(stamps.size() == (time_column_used ? b.samples() : 0), "consuming log_from_table: one time stamp per sample");
+  } catch (const sysid::DataError& e) {
+    check(!copied.has_value() && copied_error == e.what(), "consuming log_from_table: the same error as the copying one");
   }
   return 0;
 }
