@@ -186,12 +186,17 @@ void write_file_atomically(const std::string& path, const std::string& contents)
   commit(guard, tmp, target, dir, path);
 }
 
-std::string read_whole_file(const std::string& path) {
+int open_for_reading(const std::string& path) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) {
     const int err = errno;
     throw DataError(path, 0, 0, "cannot open the file: " + errno_text(err));
   }
+  return fd;
+}
+
+std::string read_whole_file(const std::string& path) {
+  const int fd = open_for_reading(path);
   struct Closer {
     int fd;
     ~Closer() { ::close(fd); }

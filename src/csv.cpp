@@ -74,8 +74,8 @@ class CsvParser {
     // blank or comment lines among the data the bound is exact and no copy is made.
     const auto rest = static_cast<std::size_t>(m_end - m_p);
     std::size_t newlines = 0;
-    for (const char* chunk = m_p; chunk < m_end; chunk += std::min<std::size_t>(kReleaseBytes, m_end - chunk)) {
-      const char* chunk_end = chunk + std::min<std::size_t>(kReleaseBytes, m_end - chunk);
+    for (const char *chunk = m_p, *chunk_end; chunk < m_end; chunk = chunk_end) {
+      chunk_end = chunk + std::min<std::ptrdiff_t>(kReleaseBytes, m_end - chunk);
       for (const char* q = chunk;
            (q = static_cast<const char*>(std::memchr(q, '\n', static_cast<std::size_t>(chunk_end - q)))); ++q)
         ++newlines;

@@ -1,25 +1,16 @@
 // Implementation of io/mapped_file.hpp (method there).
 #include "sysid/io/mapped_file.hpp"
 
-#include <fcntl.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <cerrno>
-#include <system_error>
-
-#include "sysid/core/errors.hpp"
 #include "sysid/io/atomic_file.hpp"
 
 namespace sysid {
 
 MappedFile::MappedFile(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) {
-    const int err = errno;
-    throw DataError(path, 0, 0, "cannot open the file: " + std::generic_category().message(err));
-  }
+  const int fd = open_for_reading(path);
   struct Closer {
     int fd;
     ~Closer() { ::close(fd); }  // a mapping outlives its descriptor

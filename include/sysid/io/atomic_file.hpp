@@ -39,6 +39,10 @@ void write_file_atomically(const std::string& path, const std::string& contents)
 /// directory.
 std::string read_whole_file(const std::string& path);
 
+/// open(2) for reading (close-on-exec); sysid::DataError (file = path) naming the
+/// cause when that fails. The caller closes the descriptor.
+int open_for_reading(const std::string& path);
+
 /// read_whole_file on a descriptor already open for reading (left open), e.g. a
 /// FIFO that must not be opened twice; `path` names it in messages.
 std::string read_whole_descriptor(int fd, const std::string& path);

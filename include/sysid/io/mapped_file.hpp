@@ -10,7 +10,7 @@
 /// from the process (madvise MADV_DONTNEED: a later access reads them again from the page
 /// cache, so releasing too early costs time, never correctness). Anything else
 /// (a pipe, a device, an empty file, a failed mapping) is read whole into memory
-/// by read_whole_file, where release does nothing.
+/// from the same descriptor (read_whole_descriptor), where release does nothing.
 ///
 /// Errors: sysid::DataError (file = path) when the file is missing, unreadable or
 /// a directory. A mapped file truncated by another process while it is read ends
