@@ -52,6 +52,29 @@ TEST(LaggedSums, CorrelationInDoubleDoubleSurvivesCancellation) {
   }
 }
 
+TEST(LaggedSums, CorrelationKernelsGiveTheSameBitsForEveryLagCount) {
+  // The run-time choice of kernel (FMA or Dekker's product; vector widths) and
+  // the number of lags asked for must not change a single bit of any lag:
+  // models are reproducible across machines. Lengths cross the 256-term blocks.
+  const Eigen::MatrixXd w = test::white_noise(1300, 2, 11);
+  for (const Eigen::Index count : {Eigen::Index{1}, Eigen::Index{255}, Eigen::Index{257}, Eigen::Index{1200}})
+    for (const Eigen::Index lags : {Eigen::Index{1}, Eigen::Index{3}, Eigen::Index{5}, Eigen::Index{21}, Eigen::Index{66}}) {
+      std::vector<DoubleDouble> all(static_cast<std::size_t>(lags)), portable(all.size());
+      detail::correlate_double_double(w.col(0).data(), w.col(1).data(), count, lags, all.data());
+      detail::correlate_double_double_without_fma(w.col(0).data(), w.col(1).data(), count, lags, portable.data());
+      for (Eigen::Index q = 0; q < lags; ++q) {
+        DoubleDouble one;
+        detail::correlate_double_double(w.col(0).data(), w.col(1).data() + q, count, 1, &one);
+        const DoubleDouble& got = all[static_cast<std::size_t>(q)];
+        const DoubleDouble& dekker = portable[static_cast<std::size_t>(q)];
+        EXPECT_EQ(got.hi, one.hi) << "count " << count << " lags " << lags << " lag " << q;
+        EXPECT_EQ(got.lo, one.lo) << "count " << count << " lags " << lags << " lag " << q;
+        EXPECT_EQ(got.hi, dekker.hi) << "count " << count << " lags " << lags << " lag " << q;
+        EXPECT_EQ(got.lo, dekker.lo) << "count " << count << " lags " << lags << " lag " << q;
+      }
+    }
+}
+
 TEST(LaggedSums, DoubleDoubleAgreesWithDoubleOnWellConditionedData) {
   const Eigen::MatrixXd x = test::white_noise(500, 2, 1), y = test::white_noise(500, 3, 2);
   const Eigen::Index i2 = 6, j = 500 - i2 + 1;

@@ -64,30 +64,15 @@ Eigen::MatrixXd lagged_sums(const MX& x, const MY& y, Eigen::Index i2, Eigen::In
 /// like (n u)^2 with the number of terms n; restarting it every block and adding
 /// the block results in double-double keeps the error near block * u^2 relative
 /// to sum |a b| (about 3e-30 for block = 256) however long the record. The loop
-/// over q carries no dependency, so it vectorises.
-inline void correlate_double_double(const double* a, const double* b, Eigen::Index count, Eigen::Index lags,
-                                    DoubleDouble* out) {
-  constexpr Eigen::Index block = 256;
-  std::vector<double> hi(static_cast<std::size_t>(lags)), lo(static_cast<std::size_t>(lags));
-  double* __restrict h = hi.data();
-  double* __restrict e = lo.data();
-  for (Eigen::Index t0 = 0; t0 < count; t0 += block) {
-    std::fill(hi.begin(), hi.end(), 0.0);
-    std::fill(lo.begin(), lo.end(), 0.0);
-    const Eigen::Index t1 = std::min(count, t0 + block);
-    for (Eigen::Index t = t0; t < t1; ++t) {
-      const double at = a[t];
-      const double* __restrict bt = b + t;
-      for (Eigen::Index q = 0; q < lags; ++q) {
-        const DoubleDouble p = two_prod(at, bt[q]);
-        const DoubleDouble s = two_sum(h[q], p.hi);
-        h[q] = s.hi;
-        e[q] += p.lo + s.lo;
-      }
-    }
-    for (Eigen::Index q = 0; q < lags; ++q) out[q] += two_sum(h[q], e[q]);
-  }
-}
+/// over q carries no dependency, so it vectorises. The portable build also holds
+/// the kernel compiled for AVX2 + FMA and for AVX-512, chosen at run time by the
+/// processor's features (src/lagged_sums.cpp); every kernel returns the same bits.
+void correlate_double_double(const double* a, const double* b, Eigen::Index count, Eigen::Index lags,
+                             DoubleDouble* out);
+/// The same sums by the kernel without FMA (Dekker's product), whatever the
+/// processor: for the test that every kernel returns the same bits.
+void correlate_double_double_without_fma(const double* a, const double* b, Eigen::Index count, Eigen::Index lags,
+                                         DoubleDouble* out);
 
 /// lagged_sums in double-double (same layout and arguments): the first block row
 /// and column by correlate_double_double, the window updates with exact
