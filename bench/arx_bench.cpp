@@ -1,5 +1,6 @@
 // ARX with na = nb = 32 on 10^6 samples (issue 4: target under 2 s), SISO, by the
-// library's Householder QR of the lagged regressors (pem/arx.hpp). For scale,
+// library's route (pem/arx.hpp: the double-double Gram matrix of the lagged
+// regressors from lagged sums, pem/lagged_regression.hpp). For scale,
 // the same run times the cheapest conceivable estimator on the same data: the
 // normal equations X^T X theta = X^T y by one Cholesky (which the library avoids
 // for accuracy, STYLE.md), and reports the ratio. The data are a 4th-order

@@ -1,15 +1,87 @@
 // Implementation of pem/lagged_regression.hpp (method in the header).
+#include <sysid/core/detail/lagged_sums.hpp>
+#include <sysid/core/double_double_cholesky.hpp>
 #include <sysid/core/streaming_qr.hpp>
 #include <sysid/pem/lagged_regression.hpp>
 
 #include <algorithm>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 namespace sysid {
 
+namespace {
+
+/// Column (signal, lag, sign) of [Phi target], in the order of the terms, the target last.
+struct LaggedColumn {
+  Eigen::Index signal = 0;
+  int lag = 0;
+  double sign = 1.0;
+};
+
+std::vector<LaggedColumn> lagged_columns(Eigen::Index target, const std::vector<RegressionTerm>& terms) {
+  std::vector<LaggedColumn> columns;
+  for (const RegressionTerm& t : terms)
+    for (int k = 0; k < t.count; ++k) columns.push_back({t.signal, t.first_lag + k, t.sign});
+  columns.push_back({target, 0, 1.0});
+  return columns;
+}
+
+/// R of [Phi target] from its double-double Gram matrix (header: the Gram
+/// route); empty when the semidefinite Cholesky refuses it. Row t >= max_lag of
+/// column (signal, lag) is s(t - lag) = s(t' + max_lag - lag) with t' = t -
+/// max_lag, so the Gram entry of two columns is the lagged sum
+/// S(max_lag - lag_a, max_lag - lag_b) over the N - max_lag rows.
+std::optional<Eigen::MatrixXd> gram_factor(const std::vector<Eigen::MatrixXd>& signals,
+                                           const std::vector<LaggedColumn>& columns, int max_lag) {
+  const Eigen::Index width = signals.front().cols(), k = static_cast<Eigen::Index>(columns.size());
+  DoubleDoubleMatrix gram = DoubleDoubleMatrix::zero(k, k);
+  for (const auto& s : signals) {
+    const Eigen::Index rows = s.rows() - max_lag;
+    if (rows <= 0) continue;
+    const DoubleDoubleMatrix sums = detail::lagged_sums_double_double(s, s, max_lag + 1, rows, true);
+    for (Eigen::Index c = 0; c < k; ++c)
+      for (Eigen::Index r = 0; r <= c; ++r) {
+        const LaggedColumn &a = columns[static_cast<std::size_t>(r)], &b = columns[static_cast<std::size_t>(c)];
+        const DoubleDouble sum = sums((max_lag - a.lag) * width + a.signal, (max_lag - b.lag) * width + b.signal);
+        const double sign = a.sign * b.sign;
+        const DoubleDouble entry = gram(r, c) + DoubleDouble(sign * sum.hi, sign * sum.lo);
+        gram.set(r, c, entry);
+        gram.set(c, r, entry);
+      }
+  }
+  DoubleDoubleCholeskyOptions semidefinite;
+  semidefinite.gram_relative_error = kDoubleDoubleGramRelativeError;
+  DoubleDoubleCholeskyResult chol = double_double_cholesky(gram, semidefinite);
+  if (!chol.factorised) return std::nullopt;
+  return std::move(chol.R);
+}
+
+/// R of [Phi target] by a Householder QR of the streamed rows.
+Eigen::MatrixXd householder_factor(const std::vector<Eigen::MatrixXd>& signals, const std::vector<LaggedColumn>& columns,
+                                   int max_lag) {
+  const Eigen::Index k = static_cast<Eigen::Index>(columns.size());
+  StreamingQR qr(k);
+  const Eigen::Index chunk = 2048;
+  Eigen::MatrixXd rows(chunk, k);
+  for (const auto& s : signals) {
+    for (Eigen::Index start = max_lag; start < s.rows(); start += chunk) {
+      const Eigen::Index count = std::min(chunk, s.rows() - start);
+      for (Eigen::Index c = 0; c < k; ++c) {
+        const LaggedColumn& col = columns[static_cast<std::size_t>(c)];
+        rows.col(c).head(count) = col.sign * s.col(col.signal).segment(start - col.lag, count);
+      }
+      qr.add_rows(rows.topRows(count));
+    }
+  }
+  return qr.r();
+}
+
+}  // namespace
+
 RegressionSolution lagged_least_squares(const std::vector<Eigen::MatrixXd>& signals, Eigen::Index target,
-                                        const std::vector<RegressionTerm>& terms) {
+                                        const std::vector<RegressionTerm>& terms, const LaggedRegressionOptions& options) {
   if (signals.empty()) throw std::invalid_argument("least squares: need at least one experiment");
   const Eigen::Index width = signals.front().cols();
   if (target < 0 || target >= width) throw std::invalid_argument("least squares: target column out of range");
@@ -33,23 +105,13 @@ RegressionSolution lagged_least_squares(const std::vector<Eigen::MatrixXd>& sign
     throw std::invalid_argument("least squares: need more equations than parameters (" + std::to_string(equations) +
                                 " <= " + std::to_string(p) + "); the data are too short for these orders");
 
-  StreamingQR qr(p + 1);
-  const Eigen::Index chunk = 2048;
-  Eigen::MatrixXd rows(chunk, p + 1);
-  for (const auto& s : signals) {
-    for (Eigen::Index start = max_lag; start < s.rows(); start += chunk) {
-      const Eigen::Index count = std::min(chunk, s.rows() - start);
-      Eigen::Index col = 0;
-      for (const RegressionTerm& t : terms)
-        for (int k = 0; k < t.count; ++k, ++col)
-          rows.col(col).head(count) = t.sign * s.col(t.signal).segment(start - t.first_lag - k, count);
-      rows.col(p).head(count) = s.col(target).segment(start, count);
-      qr.add_rows(rows.topRows(count));
-    }
-  }
-  const Eigen::MatrixXd r = qr.r();
-  const Eigen::MatrixXd r11 = r.topLeftCorner(p, p).triangularView<Eigen::Upper>();
+  const std::vector<LaggedColumn> columns = lagged_columns(target, terms);
   RegressionSolution out;
+  std::optional<Eigen::MatrixXd> gram_r;
+  if (options.gram_first) gram_r = gram_factor(signals, columns, max_lag);
+  out.route = gram_r ? "gram_double_double" : "householder_qr";
+  const Eigen::MatrixXd r = gram_r ? std::move(*gram_r) : householder_factor(signals, columns, max_lag);
+  const Eigen::MatrixXd r11 = r.topLeftCorner(p, p).triangularView<Eigen::Upper>();
   out.rows = equations;
   out.residual_sum_of_squares = r(p, p) * r(p, p);
   out.residual_variance = out.residual_sum_of_squares / static_cast<double>(equations - p);

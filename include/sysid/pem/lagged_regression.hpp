@@ -8,11 +8,26 @@
 /// over one or several experiments (rows start where every lag exists, so no
 /// initial condition is assumed and experiments never see each other's samples).
 ///
-/// Method: the regressor rows are streamed through a Householder QR
-/// (core/streaming_qr.hpp) with the target as an extra column; theta solves the
-/// triangular system (complete orthogonal decomposition of R when it is
-/// rank-deficient), never the normal equations. Memory O(p^2) for p parameters,
-/// whatever the number of samples.
+/// Method: with R = [R11 r; 0 rho] the triangular factor of [Phi target],
+/// theta solves R11 theta = r (by a complete orthogonal decomposition of R11
+/// when it is rank-deficient) and rho^2 is the residual sum of squares. R comes
+/// by one of two routes:
+///  - Gram (default first): every column is a shifted copy of a few signals,
+///    so the Gram matrix of [Phi target] is a table of lagged sums,
+///    O(N s^2 L) work for s signals and L lags instead of the QR's O(N p^2)
+///    (core/detail/lagged_sums.hpp). It is summed in double-double (about
+///    1e-30 relative to the sums of |products|) and factorised by the
+///    double-double Cholesky in semidefinite mode
+///    (core/double_double_cholesky.hpp), so R is at least as accurate as a
+///    Householder R even at condition numbers near 1/u; these are not the
+///    normal equations in double, whose error would grow with cond^2.
+///    ARX(32, 32) on 10^6 samples: 0.12 s against the QR's 0.95 s (and the
+///    double normal equations' 0.42 s, bench/arx_bench.cpp).
+///  - Householder QR: the regressor rows streamed through
+///    core/streaming_qr.hpp with the target as an extra column, when the
+///    Gram route is refused (a pivot negative beyond the Gram matrix's errors)
+///    or asked for. Memory O(p^2) for p parameters, whatever the number of
+///    samples (the Gram route's is O(s^2 L^2)).
 ///
 /// Diagnostics: the residual variance ||e||^2 / (rows - p), the parameter
 /// covariance sigma^2 (R^T R)^-1 (Ljung 1999, eq. 7.34 / II.33), and the
@@ -39,6 +54,13 @@ struct RegressionSolution {
   Eigen::Index rows = 0;         ///< equations used
   double condition = 0;          ///< of the column-scaled R
   bool rank_deficient = false;
+  std::string route;             ///< "gram_double_double" or "householder_qr"
+};
+
+struct LaggedRegressionOptions {
+  /// true: the double-double Gram route first, the QR if it is refused
+  /// (header comment); false: the QR only.
+  bool gram_first = true;
 };
 
 /// Purpose: the regression of the file comment; signals[e] is experiment e's
@@ -47,6 +69,7 @@ struct RegressionSolution {
 /// signal indices in range; first_lag >= 1 for the target signal; more
 /// equations than parameters in total.
 RegressionSolution lagged_least_squares(const std::vector<Eigen::MatrixXd>& signals, Eigen::Index target,
-                                        const std::vector<RegressionTerm>& terms);
+                                        const std::vector<RegressionTerm>& terms,
+                                        const LaggedRegressionOptions& options = {});
 
 }  // namespace sysid
