@@ -1,4 +1,5 @@
 // Implementation of pem/lagged_regression.hpp (method in the header).
+#include <sysid/core/column_scaled_condition.hpp>
 #include <sysid/core/detail/lagged_sums.hpp>
 #include <sysid/core/double_double_cholesky.hpp>
 #include <sysid/core/streaming_qr.hpp>
@@ -115,12 +116,7 @@ RegressionSolution lagged_least_squares(const std::vector<Eigen::MatrixXd>& sign
   out.rows = equations;
   out.residual_sum_of_squares = r(p, p) * r(p, p);
   out.residual_variance = out.residual_sum_of_squares / static_cast<double>(equations - p);
-  // Condition of the column-scaled R (collinearity, not units).
-  Eigen::VectorXd norms = r11.colwise().norm().transpose();
-  for (Eigen::Index k = 0; k < p; ++k)
-    if (!(norms(k) > 0)) norms(k) = 1.0;
-  const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(r11 * norms.cwiseInverse().asDiagonal()).singularValues();
-  out.condition = sv(p - 1) > 0 ? sv(0) / sv(p - 1) : std::numeric_limits<double>::infinity();
+  out.condition = column_scaled_condition(r11);  // collinearity, not units
   out.rank_deficient = !(out.condition < 1e12);
   if (!out.rank_deficient) {
     out.theta = r11.triangularView<Eigen::Upper>().solve(r.col(p).head(p));

@@ -1,4 +1,5 @@
 // Implementation of pem/prediction_error.hpp (method and references in the header).
+#include <sysid/core/column_scaled_condition.hpp>
 #include <sysid/core/detail/lagged_sums.hpp>
 #include <sysid/core/double_double_cholesky.hpp>
 #include <sysid/core/parallel_for.hpp>
@@ -626,13 +627,6 @@ bool armax_subspace_start(PolynomialModel& model, const std::vector<ScaledRecord
   return model.A.allFinite() && model.C.allFinite();
 }
 
-double scaled_condition(const Eigen::MatrixXd& r11) {
-  Eigen::VectorXd norms = r11.colwise().norm().transpose();
-  for (Eigen::Index k = 0; k < norms.size(); ++k)
-    if (!(norms(k) > 0)) norms(k) = 1.0;
-  const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(r11 * norms.cwiseInverse().asDiagonal()).singularValues();
-  return sv(sv.size() - 1) > 0 ? sv(0) / sv(sv.size() - 1) : std::numeric_limits<double>::infinity();
-}
 
 }  // namespace
 
@@ -775,7 +769,7 @@ PemResult pem(IoData data, const PemOptions& options) {
 
   // Covariance sigma^2 (J^T J)^-1 and conditioning at the solution (scaled units).
   const Eigen::MatrixXd r11 = r.topLeftCorner(p, p).triangularView<Eigen::Upper>();
-  res.condition = scaled_condition(r11);
+  res.condition = column_scaled_condition(r11);
   const double sigma2 = 2.0 * cost / std::max(1.0, total - static_cast<double>(p));
   const Eigen::MatrixXd r_inv = r11.completeOrthogonalDecomposition().pseudoInverse();
   Eigen::MatrixXd covariance = sigma2 * r_inv * r_inv.transpose();

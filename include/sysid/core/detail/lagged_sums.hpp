@@ -82,7 +82,8 @@ void correlate_double_double_without_fma(const double* a, const double* b, Eigen
 template <class MX, class MY>
 DoubleDoubleMatrix lagged_sums_double_double(const MX& x_in, const MY& y_in, Eigen::Index i2, Eigen::Index j,
                                              bool symmetric) {
-  const Eigen::MatrixXd x = x_in, y = y_in;  // contiguous columns for the kernel
+  // Contiguous columns for the kernel: a view of a plain matrix, a copy only of an expression.
+  const Eigen::Ref<const Eigen::MatrixXd> x(x_in), y(y_in);
   const Eigen::Index mx = x.cols(), my = y.cols();
   DoubleDoubleMatrix s = DoubleDoubleMatrix::zero(i2 * mx, i2 * my);
   std::vector<DoubleDouble> lagged(static_cast<std::size_t>(i2));
