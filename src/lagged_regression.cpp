@@ -108,8 +108,12 @@ RegressionSolution lagged_least_squares(const std::vector<Eigen::MatrixXd>& sign
 
   const std::vector<LaggedColumn> columns = lagged_columns(target, terms);
   RegressionSolution out;
+  // The lagged-sum table covers every signal at every lag up to max_lag; when the
+  // terms use a small part of it (many signals, few lags each, or a long first
+  // lag) it would cost more memory and time than the QR: then the QR.
+  const Eigen::Index table_side = static_cast<Eigen::Index>(max_lag + 1) * width;
   std::optional<Eigen::MatrixXd> gram_r;
-  if (options.gram_first) gram_r = gram_factor(signals, columns, max_lag);
+  if (options.gram_first && table_side <= 2 * (p + 1)) gram_r = gram_factor(signals, columns, max_lag);
   out.route = gram_r ? "gram_double_double" : "householder_qr";
   const Eigen::MatrixXd r = gram_r ? std::move(*gram_r) : householder_factor(signals, columns, max_lag);
   const Eigen::MatrixXd r11 = r.topLeftCorner(p, p).triangularView<Eigen::Upper>();

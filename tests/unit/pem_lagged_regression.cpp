@@ -162,4 +162,14 @@ TEST(LaggedRegression, CollinearRegressorsAreReportedAndTheGramRouteKeepsTheTrue
   }
 }
 
+TEST(LaggedRegression, SparseUseOfTheLagTableGoesToTheQr) {
+  // One coefficient at lag 40 of each signal: the lagged-sum table (2 signals x
+  // 41 lags) would be 40x the 3 x 3 Gram matrix: the QR answers.
+  const Eigen::MatrixXd s = resonant_arx_log(1000, 0.8, 0.6, 0.1, 7);
+  const std::vector<RegressionTerm> terms{{0, 40, 1, -1.0}, {1, 40, 1, 1.0}};
+  const RegressionSolution sol = lagged_least_squares({s}, 0, terms);
+  EXPECT_EQ(sol.route, "householder_qr");
+  EXPECT_EQ(sol.rows, 1000 - 40);
+}
+
 }  // namespace test_unit_pem_lagged_regression

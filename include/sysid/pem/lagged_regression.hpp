@@ -23,11 +23,13 @@
 ///    normal equations in double, whose error would grow with cond^2.
 ///    ARX(32, 32) on 10^6 samples: 0.12 s against the QR's 0.95 s (and the
 ///    double normal equations' 0.42 s, bench/arx_bench.cpp).
+///    Its lagged-sum table covers every signal at every lag: taken only when
+///    that table's side, s (L + 1), is at most 2 (p + 1).
 ///  - Householder QR: the regressor rows streamed through
 ///    core/streaming_qr.hpp with the target as an extra column, when the
-///    Gram route is refused (a pivot negative beyond the Gram matrix's errors)
-///    or asked for. Memory O(p^2) for p parameters, whatever the number of
-///    samples (the Gram route's is O(s^2 L^2)).
+///    Gram route is refused (a pivot negative beyond the Gram matrix's errors),
+///    not taken (above) or not asked for. Memory O(p^2) for p parameters,
+///    whatever the number of samples.
 ///
 /// Diagnostics: the residual variance ||e||^2 / (rows - p), the parameter
 /// covariance sigma^2 (R^T R)^-1 (Ljung 1999, eq. 7.34 / II.33), and the
