@@ -52,11 +52,7 @@ std::optional<Eigen::MatrixXd> gram_factor(const std::vector<Eigen::MatrixXd>& s
         gram.set(c, r, entry);
       }
   }
-  DoubleDoubleCholeskyOptions semidefinite;
-  semidefinite.gram_relative_error = kDoubleDoubleGramRelativeError;
-  DoubleDoubleCholeskyResult chol = double_double_cholesky(gram, semidefinite);
-  if (!chol.factorised) return std::nullopt;
-  return std::move(chol.R);
+  return lagged_sums_gram_factor(gram);
 }
 
 /// R of [Phi target] by a Householder QR of the streamed rows.

@@ -221,11 +221,7 @@ std::optional<Eigen::MatrixXd> gram_jacobian_factor(const std::vector<FilteredRe
     if (fr.eps.size() <= max_shift) return std::nullopt;  // a record shorter than the lags: only the QR route has rows for it
     add_block(gram, 0, 0, detail::shifted_columns_gram_double_double(signals, columns));
   }
-  DoubleDoubleCholeskyOptions semidefinite;
-  semidefinite.gram_relative_error = kDoubleDoubleGramRelativeError;
-  DoubleDoubleCholeskyResult chol = double_double_cholesky(gram, semidefinite);
-  if (!chol.factorised) return std::nullopt;
-  return std::move(chol.R);
+  return lagged_sums_gram_factor(gram);
 }
 
 /// R factor of [J eps] over all records ((p+1) x (p+1), non-negative
@@ -626,7 +622,6 @@ bool armax_subspace_start(PolynomialModel& model, const std::vector<ScaledRecord
   }
   return model.A.allFinite() && model.C.allFinite();
 }
-
 
 }  // namespace
 

