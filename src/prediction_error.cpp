@@ -356,8 +356,72 @@ void output_error_start(PolynomialModel& model, const std::vector<ScaledRecord>&
   }
 }
 
-/// One Levenberg-Marquardt run from `model` (scaled units); the model is
-/// updated in place. `r` ends as the R factor of [J eps] at the final model.
+/// Whether eps is linear in the A and B coefficients once C is fixed (no D, no
+/// F, a C to eliminate them under, and something to eliminate): ARMA, ARMAX.
+bool separable(const PolynomialModel& m) {
+  if (m.nd() > 0 || m.nc() == 0) return false;
+  bool linear = m.na() > 0;
+  for (Eigen::Index i = 0; i < m.inputs(); ++i) {
+    if (m.nf(i) > 0) return false;
+    linear = linear || m.nb(i) > 0;
+  }
+  return linear;
+}
+
+/// A and B minimising the prediction-error cost for the model's C (variable
+/// projection, header): eps = A (y / C) - sum_i B_i (u_i / C) is linear in
+/// them, so they solve the least-squares regression of y / C on its own past
+/// and on the past of each u_i / C, every column filtered from rest as in the
+/// cost. Its columns are shifted copies of those 1 + m signals, so R comes from
+/// their double-double Gram matrix of lagged sums (the same route and accuracy
+/// as the Jacobian's, gram_jacobian_factor) and the coefficients from a
+/// complete orthogonal decomposition of R (minimum norm where the regression is
+/// rank deficient to working precision: near common factors).
+/// The model is changed only when its cost falls (the minimum-norm solution of
+/// the rank that can be resolved can lie above the model's cost by rounding),
+/// and left as it is when a record is shorter than the lags or the Gram
+/// matrix is refused. Returns the model's cost afterwards.
+double project_linear_part(PolynomialModel& model, const std::vector<ScaledRecord>& records, double cost) {
+  const Eigen::Index m = model.inputs();
+  const Eigen::VectorXd one = Eigen::VectorXd::Ones(1);
+  // Columns: -y_f(t - k), k = 1..na; u_if(t - nk_i - j), j < nb_i; then the target y_f(t).
+  std::vector<detail::ShiftedColumn> columns;
+  for (Eigen::Index k = 1; k <= model.na(); ++k) columns.push_back({0, k, -1.0});
+  for (Eigen::Index i = 0; i < m; ++i)
+    for (Eigen::Index j = 0; j < model.nb(i); ++j)
+      columns.push_back({static_cast<std::size_t>(1 + i), model.nk[static_cast<std::size_t>(i)] + j, 1.0});
+  columns.push_back({0, 0, 1.0});
+  const Eigen::Index p = static_cast<Eigen::Index>(columns.size()) - 1;
+  Eigen::Index max_shift = 0;
+  for (const auto& c : columns) max_shift = std::max(max_shift, c.shift);
+  DoubleDoubleMatrix gram = DoubleDoubleMatrix::zero(p + 1, p + 1);
+  for (const auto& r : records) {
+    if (r.y.size() <= max_shift) return cost;
+    std::vector<Eigen::VectorXd> signals{filter_polynomial(one, model.C, r.y)};
+    for (Eigen::Index i = 0; i < m; ++i) signals.push_back(filter_polynomial(one, model.C, r.u.col(i)));
+    add_block(gram, 0, 0, detail::shifted_columns_gram_double_double(signals, columns));
+  }
+  const std::optional<Eigen::MatrixXd> factor = lagged_sums_gram_factor(gram);
+  if (!factor) return cost;
+  const Eigen::MatrixXd r11 = factor->topLeftCorner(p, p).triangularView<Eigen::Upper>();
+  const Eigen::VectorXd theta = r11.completeOrthogonalDecomposition().solve(factor->col(p).head(p));
+  if (!theta.allFinite()) return cost;
+  PolynomialModel projected = model;
+  projected.A.tail(model.na()) = theta.head(model.na());
+  Eigen::Index at = model.na();
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    projected.B[k] = theta.segment(at, model.nb(i));
+    at += model.nb(i);
+  }
+  const double projected_cost = cost_of(projected, records);
+  if (!(projected_cost < cost)) return cost;
+  model = std::move(projected);
+  return projected_cost;
+}
+
+/// The outcome of a Levenberg-Marquardt run (scaled units). `r` is the R
+/// factor of [J eps] at the final model.
 struct LmRun {
   PemResult::Status status = PemResult::Status::failed;
   std::string termination;
@@ -365,38 +429,47 @@ struct LmRun {
   double initial_cost = 0, final_cost = 0;
   std::vector<double> cost_history;
   Eigen::MatrixXd r;
-  double lambda = 1e-3;  ///< Marquardt damping at the end (a continued run starts from it)
+  double lambda = 1e-3;  ///< Marquardt damping
 };
 
-LmRun levenberg_marquardt(PolynomialModel& model, const std::vector<ScaledRecord>& records, Eigen::Index p,
-                          const PemOptions& options, int max_iterations, double initial_lambda = 1e-3) {
-  LmRun run;
-  Eigen::Index samples = 0;
-  for (const auto& r : records) samples += r.y.size();
-  Eigen::VectorXd theta = pack_parameters(model);
-  double cost = cost_of(model, records);
-  run.initial_cost = cost;
-  run.cost_history.push_back(cost);
-  double& lambda = run.lambda;
-  lambda = initial_lambda;
-  double nu = 2.0;
-  double shrink = 0.1;  // damping factor after a well-predicted step (see below)
-  Eigen::MatrixXd& r = run.r;
-  r = jacobian_factor(model, records, p);
-  run.status = PemResult::Status::max_iterations;
-  run.termination = "reached max_iterations (" + std::to_string(options.max_iterations) + ")";
-  int iteration = 0;
-  bool need_factor = false;
-  while (iteration < max_iterations) {
-    if (need_factor) r = jacobian_factor(model, records, p);
+/// Levenberg-Marquardt from a model (scaled units), one iteration at a time so
+/// that several starts can be raced in step (pem's automatic ARMAX start); the
+/// model is updated in place.
+class LevenbergMarquardt {
+ public:
+  LevenbergMarquardt(PolynomialModel& start, const std::vector<ScaledRecord>& scaled_records, Eigen::Index parameters,
+                     const PemOptions& pem_options)
+      : model(start), records(scaled_records), p(parameters), options(pem_options) {
+    for (const auto& r : records) samples += r.y.size();
+    cost = cost_of(model, records);
+    run.initial_cost = cost;
+    run.cost_history.push_back(cost);
+    project = options.variable_projection && separable(model);
+    if (project) {
+      cost = project_linear_part(model, records, cost);
+      if (cost < run.initial_cost) run.cost_history.push_back(cost);
+    }
+    theta = pack_parameters(model);
+    run.r = jacobian_factor(model, records, p);
+    run.status = PemResult::Status::max_iterations;
+    run.termination = "reached max_iterations (" + std::to_string(options.max_iterations) + ")";
+  }
+
+  /// One iteration (its first checks may find convergence without a step):
+  /// false once the run has ended, converged or failed (then status says why).
+  bool iterate() {
+    if (ended_) return false;
+    double& lambda = run.lambda;
+    if (need_factor) run.r = jacobian_factor(model, records, p);
     need_factor = false;
+    const Eigen::MatrixXd& r = run.r;
     const Eigen::MatrixXd r11 = r.topLeftCorner(p, p).triangularView<Eigen::Upper>();
     const Eigen::VectorXd r12 = r.col(p).head(p);
     const Eigen::VectorXd gradient = r11.transpose() * r12;  // J^T eps
     if (gradient.cwiseAbs().maxCoeff() <= options.gradient_tolerance * (1.0 + cost)) {
       run.status = PemResult::Status::converged;
       run.termination = "gradient below tolerance";
-      break;
+      return end();
     }
     // The full Gauss-Newton step dtheta = -R11^-1 r12 has Mahalanobis length
     // ||r12|| / sigma in the metric of the parameter covariance sigma^2 (J^T J)^-1
@@ -414,7 +487,7 @@ LmRun levenberg_marquardt(PolynomialModel& model, const std::vector<ScaledRecord
       std::ostringstream why;
       why << "Gauss-Newton step below " << options.step_significance_tolerance << " standard deviations of the parameters";
       run.termination = why.str();
-      break;
+      return end();
     }
     ++iteration;
     // Marquardt scaling by the column norms of J (= those of R11).
@@ -444,6 +517,12 @@ LmRun levenberg_marquardt(PolynomialModel& model, const std::vector<ScaledRecord
       if (denominators_stable(trial)) trial_cost = cost_of(trial, records);
       const double rho = predicted > 0 ? (cost - trial_cost) / predicted : -1.0;
       if (std::isfinite(trial_cost) && rho > 0) {
+        // The damping follows rho, the quality of the Gauss-Newton model for
+        // the joint step; the projection's further gain is then taken on top.
+        if (project) {
+          trial_cost = project_linear_part(trial, records, trial_cost);
+          step = pack_parameters(trial) - theta;
+        }
         const double decrease = cost - trial_cost;
         const bool small_step = step.norm() <= options.parameter_tolerance * (theta.norm() + options.parameter_tolerance);
         theta += step;
@@ -495,7 +574,7 @@ LmRun levenberg_marquardt(PolynomialModel& model, const std::vector<ScaledRecord
         if (lambda > 1e16) break;
       }
     }
-    if (run.status == PemResult::Status::converged) break;
+    if (run.status == PemResult::Status::converged) return end();
     if (!accepted) {
       // No damped step lowers the cost: at a minimum to working precision, or
       // stuck. Working precision when the Gauss-Newton minimiser lies inside the
@@ -507,14 +586,53 @@ LmRun levenberg_marquardt(PolynomialModel& model, const std::vector<ScaledRecord
       run.termination = flat ? "no step lowers the cost further (minimum to working precision: the Gauss-Newton "
                                "minimiser lies inside the parameters' confidence region)"
                              : "no step lowers the cost although the gradient is not small (damping limit reached)";
-      break;
+      return end();
     }
+    return true;
   }
-  run.iterations = iteration;
-  run.final_cost = cost;
-  if (need_factor) r = jacobian_factor(model, records, p);
 
-  return run;
+  /// The run as it stands: iterations, final cost and the factor at the final model.
+  LmRun finish() {
+    run.iterations = iteration;
+    run.final_cost = cost;
+    if (need_factor) run.r = jacobian_factor(model, records, p);
+    need_factor = false;
+    return run;
+  }
+
+  bool converged() const { return run.status == PemResult::Status::converged; }
+  double current_cost() const { return cost; }
+  int iterations() const { return iteration; }
+
+ private:
+  bool end() {
+    ended_ = true;
+    return false;
+  }
+
+  PolynomialModel& model;
+  const std::vector<ScaledRecord>& records;
+  const Eigen::Index p;
+  const PemOptions& options;
+  Eigen::Index samples = 0;
+  LmRun run;
+  double cost = 0;
+  bool project = false;
+  Eigen::VectorXd theta;
+  double nu = 2.0;
+  double shrink = 0.1;  // damping factor after a well-predicted step (see below)
+  int iteration = 0;
+  bool need_factor = false;
+  bool ended_ = false;
+};
+
+/// One Levenberg-Marquardt run of at most `max_iterations` iterations.
+LmRun levenberg_marquardt(PolynomialModel& model, const std::vector<ScaledRecord>& records, Eigen::Index p,
+                          const PemOptions& options, int max_iterations) {
+  LevenbergMarquardt lm(model, records, p, options);
+  while (lm.iterations() < max_iterations && lm.iterate()) {
+  }
+  return lm.finish();
 }
 
 /// Order of the high-order ARX in the Hannan-Rissanen start (PemOptions::initial_arx_order).
@@ -696,19 +814,27 @@ PemResult pem(IoData data, const PemOptions& options) {
     if (options.start == PemStart::automatic)
       starts = armax ? std::vector<PemStart>{PemStart::subspace, PemStart::hannan_rissanen}
                      : std::vector<PemStart>{PemStart::hannan_rissanen};
-    // Several starts run a few iterations each; only the lower cost goes on
-    // (the others are usually far off, and a full run from each would multiply the time).
-    // The starts are independent, so they run on the machine's cores; the choice
-    // is made afterwards in their order, as a sequential loop would make it.
+    // Several starts are raced a few iterations each, in step: every round is
+    // one iteration of each running start, the starts on the machine's cores,
+    // so the outcome does not depend on timing. The race ends after `trial`
+    // rounds, or earlier once a start has converged below every start still
+    // running (it sits at a local minimum to working precision that the others
+    // have not reached in as many iterations; with variable projection the
+    // subspace start converges on the Par2 ARMAX in 5, while the
+    // Hannan-Rissanen start, at twice its cost, would take 10 trial rounds).
+    // The lowest cost (the first in start order at a tie) goes on to the full
+    // iteration budget; a full run from each start would multiply the time.
     const int trial = starts.size() > 1 ? std::min(options.max_iterations, 10) : options.max_iterations;
-    struct StartOutcome {
+    struct Racer {
       PolynomialModel model;
       std::string name;
-      std::optional<LmRun> run;
+      std::optional<LevenbergMarquardt> lm;  // holds a reference to `model`: racers never move
+      bool running = false;
     };
-    std::vector<StartOutcome> outcomes(starts.size(), StartOutcome{model, "", std::nullopt});
+    std::vector<Racer> racers(starts.size());
     parallel_for(starts.size(), [&](std::size_t k) {
-      StartOutcome& o = outcomes[k];
+      Racer& o = racers[k];
+      o.model = model;
       const PemStart start = starts[k];
       if (start == PemStart::hannan_rissanen) {
         hannan_rissanen(o.model, records, hannan_rissanen_order(options, total));
@@ -722,29 +848,37 @@ PemResult pem(IoData data, const PemOptions& options) {
       } else {
         return;
       }
-      o.run = levenberg_marquardt(o.model, records, p, options, trial);
+      o.lm.emplace(o.model, records, p, options);
+      o.running = true;
     });
-    bool have_run = false;
-    for (StartOutcome& o : outcomes) {
-      if (!o.run) continue;
-      if (!have_run || o.run->final_cost < run.final_cost) {
-        run = std::move(*o.run);
-        model = std::move(o.model);
-        res.start = o.name;
-        have_run = true;
+    for (int round = 0; round < trial; ++round) {
+      std::vector<std::size_t> running;
+      for (std::size_t k = 0; k < racers.size(); ++k)
+        if (racers[k].running) running.push_back(k);
+      if (running.empty()) break;
+      parallel_for(running.size(), [&](std::size_t j) {
+        Racer& o = racers[running[j]];
+        o.running = o.lm->iterate();
+      });
+      double lowest_running = std::numeric_limits<double>::infinity(), lowest_converged = lowest_running;
+      for (const Racer& o : racers) {
+        if (!o.lm) continue;
+        if (o.running) lowest_running = std::min(lowest_running, o.lm->current_cost());
+        else if (o.lm->converged()) lowest_converged = std::min(lowest_converged, o.lm->current_cost());
       }
+      if (lowest_converged < lowest_running) break;
     }
-    if (!have_run)
+    Racer* winner = nullptr;
+    for (Racer& o : racers)
+      if (o.lm && (!winner || o.lm->current_cost() < winner->lm->current_cost())) winner = &o;
+    if (!winner)
       throw NumericalError(std::string("pem: the ") + (options.start == PemStart::subspace ? "subspace" : "output-error") +
                            " start of the ARMAX model failed (its sub-fit did not succeed)");
-    if (run.status != PemResult::Status::converged && run.iterations < options.max_iterations && trial < options.max_iterations) {
-      LmRun rest = levenberg_marquardt(model, records, p, options, options.max_iterations - run.iterations, run.lambda);
-      rest.iterations += run.iterations;
-      rest.initial_cost = run.initial_cost;
-      run.cost_history.insert(run.cost_history.end(), rest.cost_history.begin() + 1, rest.cost_history.end());
-      rest.cost_history = std::move(run.cost_history);
-      run = std::move(rest);
+    while (winner->lm->iterations() < options.max_iterations && winner->lm->iterate()) {
     }
+    run = winner->lm->finish();
+    model = winner->model;
+    res.start = winner->name;
   } else {
     std::vector<int> nb(options.nb.begin(), options.nb.end());
     const RegressionSolution sol = arx_regression(records, options.na, nb, nk, nullptr, 0);

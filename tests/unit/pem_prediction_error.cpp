@@ -134,6 +134,44 @@ TEST(PredictionError, SubspaceStartAloneIsNearTheTruthForEachInput) {
     EXPECT_LT(std::abs(final_err(k)), 4.0 * std::sqrt(r.covariance(k, k))) << "parameter " << k;
 }
 
+TEST(PredictionError, VariableProjectionPutsAAndBAtTheirOptimumForTheStartsC) {
+  // With C fixed, eps = (A y - B u) / C is linear in A and B: after the
+  // projection the cost's gradient in them is zero (to rounding), and the cost
+  // is below the start's own. Without it the Hannan-Rissanen start's A and B
+  // (fitted to its high-order ARX residuals) are not optimal for its C.
+  const PolynomialModel truth = make_model(Eigen::Vector3d(1.0, -1.5, 0.7), {Eigen::Vector2d(1.0, 0.5)}, {1}, {kOne},
+                                           Eigen::Vector3d(1.0, -0.6, 0.2), kOne);
+  const Eigen::Index n = 5000;
+  const Eigen::MatrixXd u = test::white_noise(n, 1, 31);
+  const Eigen::VectorXd y = simulate_polynomial(truth, u, test::white_noise(n, 1, 32, 0.5).col(0));
+  PemOptions opt;
+  opt.na = 2;
+  opt.nb = {2};
+  opt.nc = 2;
+  opt.nk = {1};
+  opt.start = PemStart::hannan_rissanen;
+  opt.max_iterations = 0;
+  opt.remove_means = false;
+  auto largest_ab_gradient = [&](const PemResult& r) {
+    const PredictionErrors pe = prediction_errors(r.model, u, y, true);
+    double worst = 0;
+    for (Eigen::Index k = 0; k < 4; ++k)  // a_1, a_2, b_1, b_2 (pack_parameters order)
+      worst = std::max(worst, std::abs(pe.jacobian.col(k).dot(pe.eps)) / (pe.jacobian.col(k).norm() * pe.eps.norm()));
+    return worst;
+  };
+  const PemResult projected = pem(IoData(u, y, 1.0), opt);
+  opt.variable_projection = false;
+  const PemResult plain = pem(IoData(u, y, 1.0), opt);
+  std::cout << "relative A, B gradient: projected " << largest_ab_gradient(projected) << ", plain "
+            << largest_ab_gradient(plain) << "\n";
+  EXPECT_LT(largest_ab_gradient(projected), 1e-10);
+  EXPECT_GT(largest_ab_gradient(plain), 1e-4);
+  EXPECT_LT(projected.final_cost, plain.final_cost);
+  EXPECT_EQ(projected.initial_cost, plain.initial_cost);  // the same start, reported before the projection
+  // C is the start's in both.
+  EXPECT_EQ((projected.model.C - plain.model.C).cwiseAbs().maxCoeff(), 0.0);
+}
+
 TEST(PredictionError, ArmaRecoversItsParameters) {
   const PolynomialModel truth = make_model(Eigen::Vector3d(1.0, -0.9, 0.5), {}, {}, {}, Eigen::Vector2d(1.0, 0.7), kOne);
   const Eigen::Index n = 20000;

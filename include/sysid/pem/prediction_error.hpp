@@ -32,6 +32,22 @@
 ///    Consecutive well-predicted steps (gain ratio > 0.75 at the first try)
 ///    shrink the damping by 0.1, 0.01, 1e-3, then 1e-4 each: on the Par2 ARMAX the
 ///    damping that suits the problem lies 15 decades below the start.
+///  - Variable projection for ARMA and ARMAX (no D, no F): once C is fixed,
+///    eps = A (y / C) - sum_i B_i (u_i / C) is linear in the A and B
+///    coefficients, so their best values for that C are an ARX least-squares
+///    problem on the data filtered by 1 / C (G. H. Golub & V. Pereyra, SIAM J.
+///    Numer. Anal. 10 (1973) 413-432; "Separable nonlinear least squares: the
+///    variable projection method and its applications", Inverse Problems 19
+///    (2003) R1-R26). It is solved at each start and after each accepted step
+///    (the joint Levenberg-Marquardt step moves C, the projection puts A and B
+///    at their optimum for it; the damping follows the joint step's gain ratio),
+///    and kept only when it lowers the cost. The joint step taken from a point
+///    where A and B are optimal is Kaufman's variable-projection step for C
+///    (L. Kaufman, BIT 15 (1975) 49-57). On the Par2 ARMAX(32,32,26,0) the
+///    subspace start's cost falls from 2.93 to 1.9879 by the projection alone
+///    (the flat minimum lies at 1.984-1.988 whichever way it is approached) and
+///    the Hannan-Rissanen start's from 3.2e4 to 4.5; the iterations from the
+///    subspace start fall from 33 to 6.
 ///  - Initial values: ARMAX/ARMA by Hannan-Rissanen (high-order ARX, its
 ///    residuals as a measured noise input, then least squares for A, B, C;
 ///    E. J. Hannan & J. Rissanen, Biometrika 69 (1982) 81-94). ARMAX also from
@@ -39,12 +55,13 @@
 ///    min(na, 20)), whose
 ///    innovation form gives A = det(zI - A), C = det(zI - A + KC) and B_i from
 ///    C adj(zI - A) B_i + D_i det(zI - A), zero-padded to the orders. Both are
-///    iterated a few steps and the lower cost goes on (PemOptions::start). The
+///    raced a few steps in lock-step and the lower cost goes on (PemOptions::start). The
 ///    subspace start matters for lightly damped plants sampled fast with white
 ///    measurement noise (C = A, roots next to the unit circle), where the
 ///    high-order ARX cannot whiten the noise and
 ///    the Hannan-Rissanen start leads to a poor local minimum (on the Par2 log
-///    its cost is 10^4 times the optimum, the subspace start's 1.5 times). On
+///    its cost is 10^4 times the optimum, the subspace start's 1.5 times, both before
+///    the variable projection above). On
 ///    request (or when n4sid fails), an output-error start instead: B, F of an OE
 ///    fit with nf = min(na, nc), then A = C = F zero-padded (the OE predictor).
 ///    OE from an ARX of
@@ -72,7 +89,8 @@ namespace sysid {
 
 /// Where the ARMAX iterations start (other structures have one start each).
 enum class PemStart {
-  /// a few iterations from the subspace and the Hannan-Rissanen starts, the
+  /// the subspace and the Hannan-Rissanen starts raced in step for up to 10
+  /// iterations, ended early once one has converged below the other; the
   /// lower cost goes on (the output-error start stands in for the subspace one
   /// when that is unavailable)
   automatic,
@@ -101,6 +119,10 @@ struct PemOptions {
   double gradient_tolerance = 1e-10;
   /// ... or when ||step|| <= parameter_tolerance * (||theta|| + parameter_tolerance).
   double parameter_tolerance = 0;
+  /// ARMA/ARMAX (no D, no F): A and B re-solved by least squares for the
+  /// current C at each start and after each accepted step (variable
+  /// projection, header). false: plain joint Levenberg-Marquardt.
+  bool variable_projection = true;
   /// High-order ARX of the Hannan-Rissanen start; 0 = min(max(3 max(na, nb, nc), 20), N / 20).
   int initial_arx_order = 0;
   int steiglitz_mcbride_iterations = 5;  ///< OE start refinement passes
