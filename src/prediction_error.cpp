@@ -193,6 +193,24 @@ double cost_of(const PolynomialModel& model, const std::vector<ScaledRecord>& re
   return v;
 }
 
+/// R factor of a matrix whose columns are shifted copies of each record's
+/// signals (the same columns for every record, the records stacked), from
+/// their double-double Gram matrix of lagged sums summed over the records
+/// (core/detail/lagged_sums.hpp, core/double_double_cholesky.hpp). Empty when a
+/// record is not longer than the largest shift or the factorisation is refused.
+std::optional<Eigen::MatrixXd> shifted_columns_factor(const std::vector<std::vector<Eigen::VectorXd>>& record_signals,
+                                                      const std::vector<detail::ShiftedColumn>& columns) {
+  Eigen::Index max_shift = 0;
+  for (const auto& c : columns) max_shift = std::max(max_shift, c.shift);
+  const auto n = static_cast<Eigen::Index>(columns.size());
+  DoubleDoubleMatrix gram = DoubleDoubleMatrix::zero(n, n);
+  for (const auto& signals : record_signals) {
+    if (signals.front().size() <= max_shift) return std::nullopt;
+    add_block(gram, 0, 0, detail::shifted_columns_gram_double_double(signals, columns));
+  }
+  return lagged_sums_gram_factor(gram);
+}
+
 /// R factor of [J eps] from its Gram matrix: the columns of J are shifted
 /// copies of a few filtered signals, and eps is one more signal, so the Gram
 /// matrix costs O(N L) for the L distinct lags (core/detail/lagged_sums.hpp)
@@ -209,19 +227,15 @@ double cost_of(const PolynomialModel& model, const std::vector<ScaledRecord>& re
 /// went to the QR: a third of them on the Par2 ARMAX(32,32,26), whose time then
 /// fell from 2.3 to 1.1 s. Empty when a pivot is negative beyond the errors
 /// of G or a record is shorter than the lags: the QR decides.
-std::optional<Eigen::MatrixXd> gram_jacobian_factor(const std::vector<FilteredRegressors>& regressors, Eigen::Index p) {
-  DoubleDoubleMatrix gram = DoubleDoubleMatrix::zero(p + 1, p + 1);
+std::optional<Eigen::MatrixXd> gram_jacobian_factor(const std::vector<FilteredRegressors>& regressors) {
+  std::vector<detail::ShiftedColumn> columns = regressors.front().columns;
+  columns.push_back({regressors.front().signals.size(), 0, 1.0});  // eps, after the signals
+  std::vector<std::vector<Eigen::VectorXd>> signals;
   for (const FilteredRegressors& fr : regressors) {
-    std::vector<Eigen::VectorXd> signals = fr.signals;
-    signals.push_back(fr.eps);
-    std::vector<detail::ShiftedColumn> columns = fr.columns;
-    columns.push_back({signals.size() - 1, 0, 1.0});
-    Eigen::Index max_shift = 0;
-    for (const auto& c : columns) max_shift = std::max(max_shift, c.shift);
-    if (fr.eps.size() <= max_shift) return std::nullopt;  // a record shorter than the lags: only the QR route has rows for it
-    add_block(gram, 0, 0, detail::shifted_columns_gram_double_double(signals, columns));
+    signals.push_back(fr.signals);
+    signals.back().push_back(fr.eps);
   }
-  return lagged_sums_gram_factor(gram);
+  return shifted_columns_factor(signals, columns);
 }
 
 /// R factor of [J eps] over all records ((p+1) x (p+1), non-negative
@@ -232,7 +246,8 @@ Eigen::MatrixXd jacobian_factor(const PolynomialModel& model, const std::vector<
   std::vector<FilteredRegressors> regressors;
   regressors.reserve(records.size());
   for (const auto& r : records) regressors.push_back(filtered_regressors(model, r.u, r.y, true));
-  if (std::optional<Eigen::MatrixXd> r = gram_jacobian_factor(regressors, p)) return std::move(*r);
+  // A record shorter than the lags has no Gram route: only the QR has rows for it.
+  if (std::optional<Eigen::MatrixXd> r = gram_jacobian_factor(regressors)) return std::move(*r);
   // Chunks of 1024 rows: about 15 % faster than the default 4 (p + 1) for p ~ 90
   // (the blocked Householder update works on taller panels), 0.75 MB at p = 90.
   StreamingQR qr(p + 1, 1024);
@@ -373,8 +388,8 @@ bool separable(const PolynomialModel& m) {
 /// them, so they solve the least-squares regression of y / C on its own past
 /// and on the past of each u_i / C, every column filtered from rest as in the
 /// cost. Its columns are shifted copies of those 1 + m signals, so R comes from
-/// their double-double Gram matrix of lagged sums (the same route and accuracy
-/// as the Jacobian's, gram_jacobian_factor) and the coefficients from a
+/// their double-double Gram matrix of lagged sums (shifted_columns_factor, as
+/// the Jacobian's) and the coefficients from a
 /// complete orthogonal decomposition of R (minimum norm where the regression is
 /// rank deficient to working precision: near common factors).
 /// The model is changed only when its cost falls (the minimum-norm solution of
@@ -392,16 +407,12 @@ double project_linear_part(PolynomialModel& model, const std::vector<ScaledRecor
       columns.push_back({static_cast<std::size_t>(1 + i), model.nk[static_cast<std::size_t>(i)] + j, 1.0});
   columns.push_back({0, 0, 1.0});
   const Eigen::Index p = static_cast<Eigen::Index>(columns.size()) - 1;
-  Eigen::Index max_shift = 0;
-  for (const auto& c : columns) max_shift = std::max(max_shift, c.shift);
-  DoubleDoubleMatrix gram = DoubleDoubleMatrix::zero(p + 1, p + 1);
+  std::vector<std::vector<Eigen::VectorXd>> signals;
   for (const auto& r : records) {
-    if (r.y.size() <= max_shift) return cost;
-    std::vector<Eigen::VectorXd> signals{filter_polynomial(one, model.C, r.y)};
-    for (Eigen::Index i = 0; i < m; ++i) signals.push_back(filter_polynomial(one, model.C, r.u.col(i)));
-    add_block(gram, 0, 0, detail::shifted_columns_gram_double_double(signals, columns));
+    signals.push_back({filter_polynomial(one, model.C, r.y)});
+    for (Eigen::Index i = 0; i < m; ++i) signals.back().push_back(filter_polynomial(one, model.C, r.u.col(i)));
   }
-  const std::optional<Eigen::MatrixXd> factor = lagged_sums_gram_factor(gram);
+  const std::optional<Eigen::MatrixXd> factor = shifted_columns_factor(signals, columns);
   if (!factor) return cost;
   const Eigen::MatrixXd r11 = factor->topLeftCorner(p, p).triangularView<Eigen::Upper>();
   const Eigen::VectorXd theta = r11.completeOrthogonalDecomposition().solve(factor->col(p).head(p));
@@ -600,9 +611,15 @@ class LevenbergMarquardt {
     return run;
   }
 
+  /// Iterates until the run ends or has taken `max_iterations` in all.
+  void iterate_up_to(int max_iterations) {
+    while (iteration < max_iterations && iterate()) {
+    }
+  }
+
+  bool ended() const { return ended_; }
   bool converged() const { return run.status == PemResult::Status::converged; }
   double current_cost() const { return cost; }
-  int iterations() const { return iteration; }
 
  private:
   bool end() {
@@ -630,8 +647,7 @@ class LevenbergMarquardt {
 LmRun levenberg_marquardt(PolynomialModel& model, const std::vector<ScaledRecord>& records, Eigen::Index p,
                           const PemOptions& options, int max_iterations) {
   LevenbergMarquardt lm(model, records, p, options);
-  while (lm.iterations() < max_iterations && lm.iterate()) {
-  }
+  lm.iterate_up_to(max_iterations);
   return lm.finish();
 }
 
@@ -820,7 +836,7 @@ PemResult pem(IoData data, const PemOptions& options) {
     // rounds, or earlier once a start has converged below every start still
     // running (it sits at a local minimum to working precision that the others
     // have not reached in as many iterations; with variable projection the
-    // subspace start converges on the Par2 ARMAX in 5, while the
+    // subspace start converges on the Par2 ARMAX in 6, while the
     // Hannan-Rissanen start, at twice its cost, would take 10 trial rounds).
     // The lowest cost (the first in start order at a tie) goes on to the full
     // iteration budget; a full run from each start would multiply the time.
@@ -829,7 +845,7 @@ PemResult pem(IoData data, const PemOptions& options) {
       PolynomialModel model;
       std::string name;
       std::optional<LevenbergMarquardt> lm;  // holds a reference to `model`: racers never move
-      bool running = false;
+      bool running() const { return lm && !lm->ended(); }
     };
     std::vector<Racer> racers(starts.size());
     parallel_for(starts.size(), [&](std::size_t k) {
@@ -849,21 +865,17 @@ PemResult pem(IoData data, const PemOptions& options) {
         return;
       }
       o.lm.emplace(o.model, records, p, options);
-      o.running = true;
     });
     for (int round = 0; round < trial; ++round) {
       std::vector<std::size_t> running;
       for (std::size_t k = 0; k < racers.size(); ++k)
-        if (racers[k].running) running.push_back(k);
+        if (racers[k].running()) running.push_back(k);
       if (running.empty()) break;
-      parallel_for(running.size(), [&](std::size_t j) {
-        Racer& o = racers[running[j]];
-        o.running = o.lm->iterate();
-      });
+      parallel_for(running.size(), [&](std::size_t j) { racers[running[j]].lm->iterate(); });
       double lowest_running = std::numeric_limits<double>::infinity(), lowest_converged = lowest_running;
       for (const Racer& o : racers) {
         if (!o.lm) continue;
-        if (o.running) lowest_running = std::min(lowest_running, o.lm->current_cost());
+        if (o.running()) lowest_running = std::min(lowest_running, o.lm->current_cost());
         else if (o.lm->converged()) lowest_converged = std::min(lowest_converged, o.lm->current_cost());
       }
       if (lowest_converged < lowest_running) break;
@@ -874,8 +886,7 @@ PemResult pem(IoData data, const PemOptions& options) {
     if (!winner)
       throw NumericalError(std::string("pem: the ") + (options.start == PemStart::subspace ? "subspace" : "output-error") +
                            " start of the ARMAX model failed (its sub-fit did not succeed)");
-    while (winner->lm->iterations() < options.max_iterations && winner->lm->iterate()) {
-    }
+    winner->lm->iterate_up_to(options.max_iterations);
     run = winner->lm->finish();
     model = winner->model;
     res.start = winner->name;
