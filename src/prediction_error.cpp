@@ -126,8 +126,10 @@ struct FilteredRegressors {
   }
 };
 
+/// `by_c`, when given, holds y / C and every u_i / C at the model's C (D = F = 1,
+/// the variable projection's signals): taken instead of filtered again.
 FilteredRegressors filtered_regressors(const PolynomialModel& model, const Eigen::MatrixXd& u, const Eigen::VectorXd& y,
-                                       bool with_signals) {
+                                       bool with_signals, const std::vector<Eigen::VectorXd>* by_c = nullptr) {
   const Eigen::Index m = model.inputs(), n = y.size();
   if (u.cols() != m || (m > 0 && u.rows() != n)) throw std::invalid_argument("pem: u and y do not match the model");
   const Eigen::VectorXd one = Eigen::VectorXd::Ones(1);
@@ -150,12 +152,15 @@ FilteredRegressors filtered_regressors(const PolynomialModel& model, const Eigen
     out.signals.push_back(std::move(signal));
     for (int j = 0; j < count; ++j) out.columns.push_back({out.signals.size() - 1, first_shift + j, sign});
   };
-  if (model.na() > 0) add(filter_polynomial(model.D, model.C, y), 1, model.na(), 1.0);
+  if (model.na() > 0)
+    add(by_c ? (*by_c)[0] : Eigen::VectorXd(filter_polynomial(model.D, model.C, y)), 1, model.na(), 1.0);
   std::vector<Eigen::VectorXd> cf(static_cast<std::size_t>(m));
   for (Eigen::Index i = 0; i < m; ++i) {
     const auto k = static_cast<std::size_t>(i);
     cf[k] = detail::polynomial_product(model.C, model.F[k]);
-    if (model.nb(i) > 0) add(filter_polynomial(model.D, cf[k], u.col(i)), model.nk[k], model.nb(i), -1.0);
+    if (model.nb(i) > 0)
+      add(by_c ? (*by_c)[1 + k] : Eigen::VectorXd(filter_polynomial(model.D, cf[k], u.col(i))), model.nk[k],
+          model.nb(i), -1.0);
   }
   if (model.nc() > 0) add(filter_polynomial(one, model.C, out.eps), 1, model.nc(), -1.0);
   if (model.nd() > 0) add(filter_polynomial(one, model.C, v), 1, model.nd(), 1.0);
@@ -193,20 +198,47 @@ double cost_of(const PolynomialModel& model, const std::vector<ScaledRecord>& re
   return v;
 }
 
+/// y / C and every u_i / C of each record at one C, with the table of their
+/// lagged sums: what the variable projection forms, and what the Jacobian
+/// factor at the same C (after a step, the projection's model) takes instead
+/// of filtering and correlating them again (a quarter of its lags on the Par2
+/// ARMAX(32,32,26)).
+struct FilteredByC {
+  Eigen::VectorXd c;
+  std::vector<std::vector<Eigen::VectorXd>> signals;  ///< per record: y / C, then u_i / C
+  std::vector<detail::LaggedSumsTable> tables;        ///< per record
+
+  /// Whether these are the signals of the model's C and the model's Jacobian
+  /// starts with them in the same order (y / C, then u_i / C for every input).
+  bool serves(const PolynomialModel& m) const {
+    if (c.size() != m.C.size() || c != m.C || m.na() == 0 || m.nd() > 0) return false;
+    for (Eigen::Index i = 0; i < m.inputs(); ++i)
+      if (m.nb(i) == 0 || m.nf(i) > 0) return false;
+    return true;
+  }
+};
+
 /// R factor of a matrix whose columns are shifted copies of each record's
 /// signals (the same columns for every record, the records stacked), from
 /// their double-double Gram matrix of lagged sums summed over the records
-/// (core/detail/lagged_sums.hpp, core/double_double_cholesky.hpp). Empty when a
-/// record is not longer than the largest shift or the factorisation is refused.
+/// (core/detail/lagged_sums.hpp, core/double_double_cholesky.hpp). `known`
+/// (one per record) holds lagged sums of the records' first signals already
+/// formed; `tables` receives this call's. Empty when a record is not longer
+/// than the largest shift or the factorisation is refused.
 std::optional<Eigen::MatrixXd> shifted_columns_factor(const std::vector<std::vector<Eigen::VectorXd>>& record_signals,
-                                                      const std::vector<detail::ShiftedColumn>& columns) {
+                                                      const std::vector<detail::ShiftedColumn>& columns,
+                                                      const std::vector<detail::LaggedSumsTable>* known = nullptr,
+                                                      std::vector<detail::LaggedSumsTable>* tables = nullptr) {
   Eigen::Index max_shift = 0;
   for (const auto& c : columns) max_shift = std::max(max_shift, c.shift);
   const auto n = static_cast<Eigen::Index>(columns.size());
   DoubleDoubleMatrix gram = DoubleDoubleMatrix::zero(n, n);
-  for (const auto& signals : record_signals) {
-    if (signals.front().size() <= max_shift) return std::nullopt;
-    add_block(gram, 0, 0, detail::shifted_columns_gram_double_double(signals, columns));
+  if (tables) tables->clear();
+  for (std::size_t e = 0; e < record_signals.size(); ++e) {
+    if (record_signals[e].front().size() <= max_shift) return std::nullopt;
+    detail::LaggedSumsTable table = detail::lagged_sums_table(record_signals[e], columns, known ? &(*known)[e] : nullptr);
+    add_block(gram, 0, 0, detail::shifted_columns_gram(table, columns));
+    if (tables) tables->push_back(std::move(table));
   }
   return lagged_sums_gram_factor(gram);
 }
@@ -227,7 +259,8 @@ std::optional<Eigen::MatrixXd> shifted_columns_factor(const std::vector<std::vec
 /// went to the QR: a third of them on the Par2 ARMAX(32,32,26), whose time then
 /// fell from 2.3 to 1.1 s. Empty when a pivot is negative beyond the errors
 /// of G or a record is shorter than the lags: the QR decides.
-std::optional<Eigen::MatrixXd> gram_jacobian_factor(const std::vector<FilteredRegressors>& regressors) {
+std::optional<Eigen::MatrixXd> gram_jacobian_factor(const std::vector<FilteredRegressors>& regressors,
+                                                    const std::vector<detail::LaggedSumsTable>* known) {
   std::vector<detail::ShiftedColumn> columns = regressors.front().columns;
   columns.push_back({regressors.front().signals.size(), 0, 1.0});  // eps, after the signals
   std::vector<std::vector<Eigen::VectorXd>> signals;
@@ -235,19 +268,24 @@ std::optional<Eigen::MatrixXd> gram_jacobian_factor(const std::vector<FilteredRe
     signals.push_back(fr.signals);
     signals.back().push_back(fr.eps);
   }
-  return shifted_columns_factor(signals, columns);
+  return shifted_columns_factor(signals, columns, known);
 }
 
 /// R factor of [J eps] over all records ((p+1) x (p+1), non-negative
 /// diagonal): from the Gram matrix when that is accurate, else by a streaming
 /// Householder QR whose rows are made in its own buffer, chunk by chunk
-/// (O(p^2) memory).
-Eigen::MatrixXd jacobian_factor(const PolynomialModel& model, const std::vector<ScaledRecord>& records, Eigen::Index p) {
+/// (O(p^2) memory). `by_c`, when it serves the model, supplies y / C, u / C and
+/// their lagged sums.
+Eigen::MatrixXd jacobian_factor(const PolynomialModel& model, const std::vector<ScaledRecord>& records, Eigen::Index p,
+                                const FilteredByC* by_c = nullptr) {
+  const bool reuse = by_c && by_c->serves(model);
   std::vector<FilteredRegressors> regressors;
   regressors.reserve(records.size());
-  for (const auto& r : records) regressors.push_back(filtered_regressors(model, r.u, r.y, true));
+  for (std::size_t e = 0; e < records.size(); ++e)
+    regressors.push_back(filtered_regressors(model, records[e].u, records[e].y, true, reuse ? &by_c->signals[e] : nullptr));
   // A record shorter than the lags has no Gram route: only the QR has rows for it.
-  if (std::optional<Eigen::MatrixXd> r = gram_jacobian_factor(regressors)) return std::move(*r);
+  if (std::optional<Eigen::MatrixXd> r = gram_jacobian_factor(regressors, reuse ? &by_c->tables : nullptr))
+    return std::move(*r);
   // Chunks of 1024 rows: about 15 % faster than the default 4 (p + 1) for p ~ 90
   // (the blocked Householder update works on taller panels), 0.75 MB at p = 90.
   StreamingQR qr(p + 1, 1024);
@@ -395,8 +433,10 @@ bool separable(const PolynomialModel& m) {
 /// The model is changed only when its cost falls (the minimum-norm solution of
 /// the rank that can be resolved can lie above the model's cost by rounding),
 /// and left as it is when a record is shorter than the lags or the Gram
-/// matrix is refused. Returns the model's cost afterwards.
-double project_linear_part(PolynomialModel& model, const std::vector<ScaledRecord>& records, double cost) {
+/// matrix is refused. `by_c` receives the filtered signals and their lagged
+/// sums (they depend on C only). Returns the model's cost afterwards.
+double project_linear_part(PolynomialModel& model, const std::vector<ScaledRecord>& records, double cost,
+                           FilteredByC& by_c) {
   const Eigen::Index m = model.inputs();
   const Eigen::VectorXd one = Eigen::VectorXd::Ones(1);
   // Columns: -y_f(t - k), k = 1..na; u_if(t - nk_i - j), j < nb_i; then the target y_f(t).
@@ -407,12 +447,14 @@ double project_linear_part(PolynomialModel& model, const std::vector<ScaledRecor
       columns.push_back({static_cast<std::size_t>(1 + i), model.nk[static_cast<std::size_t>(i)] + j, 1.0});
   columns.push_back({0, 0, 1.0});
   const Eigen::Index p = static_cast<Eigen::Index>(columns.size()) - 1;
-  std::vector<std::vector<Eigen::VectorXd>> signals;
+  by_c.c = model.C;
+  by_c.signals.clear();
   for (const auto& r : records) {
-    signals.push_back({filter_polynomial(one, model.C, r.y)});
-    for (Eigen::Index i = 0; i < m; ++i) signals.back().push_back(filter_polynomial(one, model.C, r.u.col(i)));
+    by_c.signals.push_back({filter_polynomial(one, model.C, r.y)});
+    for (Eigen::Index i = 0; i < m; ++i) by_c.signals.back().push_back(filter_polynomial(one, model.C, r.u.col(i)));
   }
-  const std::optional<Eigen::MatrixXd> factor = shifted_columns_factor(signals, columns);
+  const std::optional<Eigen::MatrixXd> factor = shifted_columns_factor(by_c.signals, columns, nullptr, &by_c.tables);
+  if (!factor) by_c = FilteredByC();
   if (!factor) return cost;
   const Eigen::MatrixXd r11 = factor->topLeftCorner(p, p).triangularView<Eigen::Upper>();
   const Eigen::VectorXd theta = r11.completeOrthogonalDecomposition().solve(factor->col(p).head(p));
@@ -457,11 +499,11 @@ class LevenbergMarquardt {
     run.cost_history.push_back(cost);
     project = options.variable_projection && separable(model);
     if (project) {
-      cost = project_linear_part(model, records, cost);
+      cost = project_linear_part(model, records, cost, by_c);
       if (cost < run.initial_cost) run.cost_history.push_back(cost);
     }
     theta = pack_parameters(model);
-    run.r = jacobian_factor(model, records, p);
+    run.r = jacobian_factor(model, records, p, &by_c);
     run.status = PemResult::Status::max_iterations;
     run.termination = "reached max_iterations (" + std::to_string(options.max_iterations) + ")";
   }
@@ -471,7 +513,7 @@ class LevenbergMarquardt {
   bool iterate() {
     if (ended_) return false;
     double& lambda = run.lambda;
-    if (need_factor) run.r = jacobian_factor(model, records, p);
+    if (need_factor) run.r = jacobian_factor(model, records, p, &by_c);
     need_factor = false;
     const Eigen::MatrixXd& r = run.r;
     const Eigen::MatrixXd r11 = r.topLeftCorner(p, p).triangularView<Eigen::Upper>();
@@ -531,7 +573,7 @@ class LevenbergMarquardt {
         // The damping follows rho, the quality of the Gauss-Newton model for
         // the joint step; the projection's further gain is then taken on top.
         if (project) {
-          trial_cost = project_linear_part(trial, records, trial_cost);
+          trial_cost = project_linear_part(trial, records, trial_cost, by_c);
           step = pack_parameters(trial) - theta;
         }
         const double decrease = cost - trial_cost;
@@ -606,7 +648,7 @@ class LevenbergMarquardt {
   LmRun finish() {
     run.iterations = iteration;
     run.final_cost = cost;
-    if (need_factor) run.r = jacobian_factor(model, records, p);
+    if (need_factor) run.r = jacobian_factor(model, records, p, &by_c);
     need_factor = false;
     return run;
   }
@@ -635,6 +677,7 @@ class LevenbergMarquardt {
   LmRun run;
   double cost = 0;
   bool project = false;
+  FilteredByC by_c;  // the last projection's signals, for the Jacobian factor at the same C
   Eigen::VectorXd theta;
   double nu = 2.0;
   double shrink = 0.1;  // damping factor after a well-predicted step (see below)

@@ -58,7 +58,8 @@ TEST(LaggedSums, CorrelationKernelsGiveTheSameBitsForEveryLagCount) {
   // models are reproducible across machines. Lengths cross the 256-term blocks.
   const Eigen::MatrixXd w = test::white_noise(1300, 2, 11);
   for (const Eigen::Index count : {Eigen::Index{1}, Eigen::Index{255}, Eigen::Index{257}, Eigen::Index{1200}})
-    for (const Eigen::Index lags : {Eigen::Index{1}, Eigen::Index{3}, Eigen::Index{5}, Eigen::Index{21}, Eigen::Index{66}}) {
+    for (const Eigen::Index lags : {Eigen::Index{1}, Eigen::Index{3}, Eigen::Index{5}, Eigen::Index{8}, Eigen::Index{21},
+                                     Eigen::Index{29}, Eigen::Index{66}}) {
       std::vector<DoubleDouble> all(static_cast<std::size_t>(lags)), portable(all.size());
       detail::correlate_double_double(w.col(0).data(), w.col(1).data(), count, lags, all.data());
       detail::correlate_double_double_without_fma(w.col(0).data(), w.col(1).data(), count, lags, portable.data());
@@ -115,6 +116,39 @@ TEST(LaggedSums, ShiftedColumnsGramIsTheExplicitGramMatrix) {
       }
       EXPECT_LT(magnitude(as_quad(gram(a, b)) - exact) / static_cast<double>(scale), 1e-28) << a << ", " << b;
     }
+}
+
+TEST(LaggedSums, TableTakesTheKnownPairsItNeedsAndFormsTheRest) {
+  // PEM's projection forms the lagged sums of y / C and u / C (shifts 0..6 and
+  // 0..4); the Jacobian at the same C needs them over 1..6 and 0..4 beside new
+  // signals. A table built with the projection's as `known` must be the table
+  // built from scratch, bit for bit; a known table that does not cover a pair
+  // (shorter shift range) must not be used for it.
+  const Eigen::MatrixXd w = test::white_noise(400, 3, 21);
+  const std::vector<Eigen::VectorXd> first{w.col(0), w.col(1)}, all{w.col(0), w.col(1), w.col(2)};
+  std::vector<detail::ShiftedColumn> projection, jacobian, short_range;
+  for (Eigen::Index k = 0; k <= 6; ++k) projection.push_back({0, k, -1.0});
+  for (Eigen::Index k = 0; k <= 4; ++k) projection.push_back({1, k, 1.0});
+  for (Eigen::Index k = 1; k <= 6; ++k) jacobian.push_back({0, k, 1.0});
+  for (Eigen::Index k = 0; k <= 4; ++k) jacobian.push_back({1, k, -1.0});
+  for (Eigen::Index k = 1; k <= 3; ++k) jacobian.push_back({2, k, -1.0});
+  for (Eigen::Index k = 0; k <= 2; ++k) short_range.push_back({0, k, 1.0});
+  short_range.push_back({1, 0, 1.0});
+  const detail::LaggedSumsTable known = detail::lagged_sums_table(first, projection);
+  EXPECT_TRUE(known.covers(0, 1, 1, 6, 0, 4));
+  EXPECT_FALSE(known.covers(0, 2, 1, 6, 1, 3));  // no third signal in it
+  const DoubleDoubleMatrix fresh = detail::shifted_columns_gram_double_double(all, jacobian);
+  for (const auto* given : {&known, static_cast<const detail::LaggedSumsTable*>(nullptr)}) {
+    const DoubleDoubleMatrix reused = detail::shifted_columns_gram(detail::lagged_sums_table(all, jacobian, given), jacobian);
+    EXPECT_EQ(reused.hi, fresh.hi);
+    EXPECT_EQ(reused.lo, fresh.lo);
+  }
+  const detail::LaggedSumsTable too_short = detail::lagged_sums_table(first, short_range);
+  EXPECT_FALSE(too_short.covers(0, 0, 1, 6, 1, 6));
+  const DoubleDoubleMatrix from_short =
+      detail::shifted_columns_gram(detail::lagged_sums_table(all, jacobian, &too_short), jacobian);
+  EXPECT_EQ(from_short.hi, fresh.hi);
+  EXPECT_EQ(from_short.lo, fresh.lo);
 }
 
 TEST(LaggedSums, ShiftedColumnsGramRejectsInconsistentInput) {

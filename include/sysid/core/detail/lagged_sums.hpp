@@ -63,8 +63,9 @@ Eigen::MatrixXd lagged_sums(const MX& x, const MY& y, Eigen::Index i2, Eigen::In
 /// two_sum, and every error term is summed in double. Dot2's error bound grows
 /// like (n u)^2 with the number of terms n; restarting it every block and adding
 /// the block results in double-double keeps the error near block * u^2 relative
-/// to sum |a b| (about 3e-30 for block = 256) however long the record. The loop
-/// over q carries no dependency, so it vectorises. The portable build also holds
+/// to sum |a b| (about 3e-30 for block = 256) however long the record. The lags
+/// carry no dependency on each other: tiles of up to 16 of them keep their
+/// partial sums in vector registers over a block. The portable build also holds
 /// the kernel compiled for AVX2 + FMA and for AVX-512, chosen at run time by the
 /// processor's features (src/lagged_sums.cpp); every kernel returns the same bits.
 void correlate_double_double(const double* a, const double* b, Eigen::Index count, Eigen::Index lags,
@@ -121,25 +122,59 @@ struct ShiftedColumn {
   double sign = 1.0;
 };
 
-/// Gram matrix G(a, b) = sum_{t<n} c_a(t) c_b(t) of ShiftedColumns, in
-/// double-double, without forming the n x p matrix: O(n L) work for the L
-/// distinct lags between the signals' shift ranges instead of O(n p^2).
+/// The lagged sums S_ab(i, j) = sum_{t<n} x_a(t - i) x_b(t - j) of signals
+/// (zero before t = 0) that a set of ShiftedColumns needs, per pair a <= b, in
+/// double-double: the intermediate of shifted_columns_gram_double_double. A
+/// caller that forms Gram matrices of several column sets over the same signals
+/// keeps it and passes it as `known` to the next table (PEM's projection and
+/// Jacobian share y / C and u / C).
+struct LaggedSumsTable {
+  std::size_t count = 0;                  ///< signals
+  std::vector<Eigen::Index> lo, hi;       ///< shift range used per signal (hi = -1: unused)
+  std::vector<DoubleDoubleMatrix> pairs;  ///< pairs[a * count + b] (a <= b): S_ab(i, j), i <= hi[a], j <= hi[b]
+
+  /// The Gram entry of two columns: sign_u sign_v S(shift_u, shift_v).
+  DoubleDouble entry(const ShiftedColumn& u, const ShiftedColumn& v) const {
+    const bool ordered = u.signal <= v.signal;
+    const DoubleDoubleMatrix& s = ordered ? pairs[u.signal * count + v.signal] : pairs[v.signal * count + u.signal];
+    const DoubleDouble value = ordered ? s(u.shift, v.shift) : s(v.shift, u.shift);
+    const double sign = u.sign * v.sign;
+    return {sign * value.hi, sign * value.lo};
+  }
+
+  /// Whether pair (a, b) holds every S_ab the shift ranges [lo_a, hi_a] x [lo_b, hi_b] need.
+  bool covers(std::size_t a, std::size_t b, Eigen::Index lo_a, Eigen::Index hi_a, Eigen::Index lo_b,
+              Eigen::Index hi_b) const {
+    return a < count && b < count && hi[a] >= 0 && hi[b] >= 0 && lo[a] <= lo_a && hi[a] >= hi_a && lo[b] <= lo_b &&
+           hi[b] >= hi_b;
+  }
+};
+
+/// The table of lagged sums that `columns` need, in O(n L) work for the L
+/// distinct lags between the signals' shift ranges.
 ///
-/// Method: for signals x, y (zero before t = 0) let S(i, j) = sum_{t<n}
-/// x(t - i) y(t - j). Shifting both by one drops the last sample:
+/// Method: let S(i, j) = sum_{t<n} x(t - i) y(t - j). Shifting both by one
+/// drops the last sample:
 ///   S(i, j) = S(i - 1, j - 1) - x(n - i) y(n - j),
 /// so every S on a diagonal i - j = L follows from its start, a correlation
 /// sum at lag L: S(L, 0) = sum_s x(s) y(s + L) and S(0, L) = sum_s y(s) x(s + L)
 /// (correlate_double_double, on copies zero-padded at the end). Only the lags
-/// between the shift ranges that columns actually use are summed.
+/// between the shift ranges that columns actually use are summed. A pair that
+/// `known` covers (a table of the same first known->count signals, bit for
+/// bit: the caller's promise) is copied from it instead.
 ///
 /// Preconditions: every signal has the same length n, and n > every shift
 /// (std::invalid_argument otherwise).
-inline DoubleDoubleMatrix shifted_columns_gram_double_double(const std::vector<Eigen::VectorXd>& signals,
-                                                             const std::vector<ShiftedColumn>& columns) {
+inline LaggedSumsTable lagged_sums_table(const std::vector<Eigen::VectorXd>& signals,
+                                         const std::vector<ShiftedColumn>& columns,
+                                         const LaggedSumsTable* known = nullptr) {
   const std::size_t count = signals.size();
-  const Eigen::Index n = count > 0 ? signals.front().size() : 0, p = static_cast<Eigen::Index>(columns.size());
-  std::vector<Eigen::Index> lo(count, n), hi(count, -1);
+  const Eigen::Index n = count > 0 ? signals.front().size() : 0;
+  LaggedSumsTable table;
+  table.count = count;
+  table.lo.assign(count, n);
+  table.hi.assign(count, -1);
+  std::vector<Eigen::Index>&lo = table.lo, &hi = table.hi;
   Eigen::Index max_shift = 0;
   for (const ShiftedColumn& c : columns) {
     if (c.signal >= count || c.shift < 0) throw std::invalid_argument("shifted_columns_gram: column refers to no signal");
@@ -150,22 +185,28 @@ inline DoubleDoubleMatrix shifted_columns_gram_double_double(const std::vector<E
   for (const auto& x : signals)
     if (x.size() != n || n <= max_shift)
       throw std::invalid_argument("shifted_columns_gram: signals of unequal length or not longer than the largest shift");
-  std::vector<Eigen::VectorXd> padded(count);
-  for (std::size_t k = 0; k < count; ++k) {
-    padded[k] = Eigen::VectorXd::Zero(n + max_shift + 1);
-    padded[k].head(n) = signals[k];
-  }
-  // table[a * count + b] (a <= b): S_ab(i, j) for i <= hi[a], j <= hi[b].
-  // The pairs are independent: one per core at a time (core/parallel_for.hpp).
-  std::vector<DoubleDoubleMatrix> table(count * count);
+  table.pairs.resize(count * count);
   std::vector<std::pair<std::size_t, std::size_t>> pairs;
   for (std::size_t a = 0; a < count; ++a)
-    for (std::size_t b = a; b < count; ++b)
-      if (hi[a] >= 0 && hi[b] >= 0) pairs.emplace_back(a, b);
+    for (std::size_t b = a; b < count; ++b) {
+      if (hi[a] < 0 || hi[b] < 0) continue;
+      if (known && known->covers(a, b, lo[a], hi[a], lo[b], hi[b]))
+        table.pairs[a * count + b] = known->pairs[a * known->count + b];
+      else
+        pairs.emplace_back(a, b);
+    }
+  std::vector<Eigen::VectorXd> padded(count);
+  for (const auto& [a, b] : pairs)
+    for (const std::size_t k : {a, b})
+      if (padded[k].size() == 0) {
+        padded[k] = Eigen::VectorXd::Zero(n + max_shift + 1);
+        padded[k].head(n) = signals[k];
+      }
+  // The pairs are independent: one per core at a time (core/parallel_for.hpp).
   parallel_for(pairs.size(), [&](std::size_t k) {
     const auto [a, b] = pairs[k];
     const Eigen::VectorXd &x = padded[a], &y = padded[b];
-    DoubleDoubleMatrix& s = table[a * count + b];
+    DoubleDoubleMatrix& s = table.pairs[a * count + b];
     s = DoubleDoubleMatrix::zero(hi[a] + 1, hi[b] + 1);
     std::vector<DoubleDouble> base;
     // Diagonals i - j = L >= 0 start at S(L, 0); those with j - i = L > 0 at S(0, L).
@@ -186,17 +227,29 @@ inline DoubleDoubleMatrix shifted_columns_gram_double_double(const std::vector<E
     for (Eigen::Index i = 1; i <= hi[a]; ++i)
       for (Eigen::Index j = 1; j <= hi[b]; ++j) s.set(i, j, s(i - 1, j - 1) - two_prod(x(n - i), y(n - j)));
   });
+  return table;
+}
+
+/// Gram matrix G(r, c) = entry(columns[r], columns[c]) of a table that covers the columns.
+inline DoubleDoubleMatrix shifted_columns_gram(const LaggedSumsTable& table, const std::vector<ShiftedColumn>& columns) {
+  const auto p = static_cast<Eigen::Index>(columns.size());
   DoubleDoubleMatrix gram{Eigen::MatrixXd(p, p), Eigen::MatrixXd(p, p)};
   for (Eigen::Index r = 0; r < p; ++r)
-    for (Eigen::Index c = 0; c < p; ++c) {
-      const ShiftedColumn &u = columns[static_cast<std::size_t>(r)], &v = columns[static_cast<std::size_t>(c)];
-      const bool ordered = u.signal <= v.signal;
-      const DoubleDoubleMatrix& s = ordered ? table[u.signal * count + v.signal] : table[v.signal * count + u.signal];
-      const DoubleDouble value = ordered ? s(u.shift, v.shift) : s(v.shift, u.shift);
-      const double sign = u.sign * v.sign;
-      gram.set(r, c, {sign * value.hi, sign * value.lo});
-    }
+    for (Eigen::Index c = 0; c < p; ++c)
+      gram.set(r, c, table.entry(columns[static_cast<std::size_t>(r)], columns[static_cast<std::size_t>(c)]));
   return gram;
+}
+
+/// Gram matrix G(a, b) = sum_{t<n} c_a(t) c_b(t) of ShiftedColumns, in
+/// double-double, without forming the n x p matrix: O(n L) work for the L
+/// distinct lags between the signals' shift ranges instead of O(n p^2)
+/// (lagged_sums_table, then shifted_columns_gram).
+///
+/// Preconditions: every signal has the same length n, and n > every shift
+/// (std::invalid_argument otherwise).
+inline DoubleDoubleMatrix shifted_columns_gram_double_double(const std::vector<Eigen::VectorXd>& signals,
+                                                             const std::vector<ShiftedColumn>& columns) {
+  return shifted_columns_gram(lagged_sums_table(signals, columns), columns);
 }
 
 }  // namespace sysid::detail
