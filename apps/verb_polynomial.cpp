@@ -3,6 +3,7 @@
 // "polynomial" model file with its innovation-form state space.
 #include <sysid/config.hpp>
 #include <sysid/core/modal_table.hpp>
+#include <sysid/core/parallel_for.hpp>
 #include <sysid/io/atomic_file.hpp>
 #include <sysid/io/polynomial_model_file.hpp>
 #include <sysid/pem/arx.hpp>
@@ -164,19 +165,22 @@ void run_polynomial(Structure structure, const PolynomialArgs& a) {
   co.input_offset = input_offset;
   co.output_offset = output_offset;
   const std::vector<std::string> names = model_output_names(file);
+  // The fits are independent: computed on the cores (core/parallel_for.hpp), printed in order.
+  CompareOptions one_step = co;
+  one_step.predict_steps = 1;
+  const IoData& one_step_data = data.validation ? *data.validation : est;
+  Eigen::VectorXd estimation_fit, validation_fit, one_step_fit;
+  parallel_invoke([&] { if (m > 0) estimation_fit = compare_fit(file.model, file.K, est, co); },
+                  [&] { if (m > 0 && data.validation) validation_fit = compare_fit(file.model, file.K, *data.validation, co); },
+                  [&] { one_step_fit = compare_fit(file.model, file.K, one_step_data, one_step); });
   if (m > 0) {
-    report << "fit on estimation data [%] (simulation, x0 estimated):\n" << format_fit_lines(compare_fit(file.model, file.K, est, co), names);
+    report << "fit on estimation data [%] (simulation, x0 estimated):\n" << format_fit_lines(estimation_fit, names);
     if (data.validation)
       report << "fit on validation data [%] (simulation, x0 estimated, " << data.validation_label << "):\n"
-             << format_fit_lines(compare_fit(file.model, file.K, *data.validation, co), names);
+             << format_fit_lines(validation_fit, names);
   }
-  {
-    CompareOptions one_step = co;
-    one_step.predict_steps = 1;
-    const IoData& target = data.validation ? *data.validation : est;
-    report << "one-step prediction fit [%] on " << (data.validation ? "validation" : "estimation") << " data:\n"
-           << format_fit_lines(compare_fit(file.model, file.K, target, one_step), names);
-  }
+  report << "one-step prediction fit [%] on " << (data.validation ? "validation" : "estimation") << " data:\n"
+         << format_fit_lines(one_step_fit, names);
   report << "modes:\n" << format_modal_table(modal_table(file.model));
   std::cout << report.str() << std::flush;
   for (const auto& w : warnings) warn(verb, w);

@@ -126,27 +126,35 @@ struct FilteredRegressors {
   }
 };
 
-/// `by_c`, when given, holds y / C and every u_i / C at the model's C (D = F = 1,
-/// the variable projection's signals): taken instead of filtered again.
+/// `by_c`, when given, holds y / C and every u_i / C at the model's C, and
+/// `known_eps` the model's prediction errors (D = F = 1: the variable
+/// projection's signals and the last cost's errors): taken instead of filtered again.
 FilteredRegressors filtered_regressors(const PolynomialModel& model, const Eigen::MatrixXd& u, const Eigen::VectorXd& y,
-                                       bool with_signals, const std::vector<Eigen::VectorXd>* by_c = nullptr) {
+                                       bool with_signals, const std::vector<Eigen::VectorXd>* by_c = nullptr,
+                                       const Eigen::VectorXd* known_eps = nullptr) {
   const Eigen::Index m = model.inputs(), n = y.size();
   if (u.cols() != m || (m > 0 && u.rows() != n)) throw std::invalid_argument("pem: u and y do not match the model");
   const Eigen::VectorXd one = Eigen::VectorXd::Ones(1);
-  // w_i = B_i / F_i u_i(t - nk_i);  v = A y - sum w_i;  eps = D / C v.
+  // w_i = B_i / F_i u_i(t - nk_i);  v = A y - sum w_i;  eps = D / C v. (v and w
+  // are needed again only for the D and F columns, which known errors exclude.)
   std::vector<Eigen::VectorXd> w(static_cast<std::size_t>(m));
-  Eigen::VectorXd v = filter_polynomial(model.A, one, y);
-  for (Eigen::Index i = 0; i < m; ++i) {
-    const auto k = static_cast<std::size_t>(i);
-    if (model.nb(i) == 0) {
-      w[k] = Eigen::VectorXd::Zero(n);
-      continue;
-    }
-    w[k] = filter_polynomial(detail::delayed(model.B[k], model.nk[k]), model.F[k], u.col(i));
-    v -= w[k];
-  }
+  Eigen::VectorXd v;
   FilteredRegressors out;
-  out.eps = filter_polynomial(model.D, model.C, v);
+  if (known_eps) {
+    out.eps = *known_eps;
+  } else {
+    v = filter_polynomial(model.A, one, y);
+    for (Eigen::Index i = 0; i < m; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      if (model.nb(i) == 0) {
+        w[k] = Eigen::VectorXd::Zero(n);
+        continue;
+      }
+      w[k] = filter_polynomial(detail::delayed(model.B[k], model.nk[k]), model.F[k], u.col(i));
+      v -= w[k];
+    }
+    out.eps = filter_polynomial(model.D, model.C, v);
+  }
   if (!with_signals) return out;
   auto add = [&](Eigen::VectorXd signal, Eigen::Index first_shift, int count, double sign) {
     out.signals.push_back(std::move(signal));
@@ -192,9 +200,16 @@ struct ScaledRecord {
   Eigen::VectorXd y;
 };
 
-double cost_of(const PolynomialModel& model, const std::vector<ScaledRecord>& records) {
+/// The cost 0.5 sum eps^2 over the records; `eps`, when given, receives each record's errors.
+double cost_of(const PolynomialModel& model, const std::vector<ScaledRecord>& records,
+               std::vector<Eigen::VectorXd>* eps = nullptr) {
   double v = 0;
-  for (const auto& r : records) v += 0.5 * prediction_errors(model, r.u, r.y, false).eps.squaredNorm();
+  if (eps) eps->clear();
+  for (const auto& r : records) {
+    Eigen::VectorXd e = prediction_errors(model, r.u, r.y, false).eps;
+    v += 0.5 * e.squaredNorm();
+    if (eps) eps->push_back(std::move(e));
+  }
   return v;
 }
 
@@ -236,7 +251,8 @@ std::optional<Eigen::MatrixXd> shifted_columns_factor(const std::vector<std::vec
   if (tables) tables->clear();
   for (std::size_t e = 0; e < record_signals.size(); ++e) {
     if (record_signals[e].front().size() <= max_shift) return std::nullopt;
-    detail::LaggedSumsTable table = detail::lagged_sums_table(record_signals[e], columns, known ? &(*known)[e] : nullptr);
+    const detail::LaggedSumsTable* known_pairs = known ? &(*known)[e] : nullptr;
+    detail::LaggedSumsTable table = detail::lagged_sums_table(record_signals[e], columns, known_pairs);
     add_block(gram, 0, 0, detail::shifted_columns_gram(table, columns));
     if (tables) tables->push_back(std::move(table));
   }
@@ -275,14 +291,17 @@ std::optional<Eigen::MatrixXd> gram_jacobian_factor(const std::vector<FilteredRe
 /// diagonal): from the Gram matrix when that is accurate, else by a streaming
 /// Householder QR whose rows are made in its own buffer, chunk by chunk
 /// (O(p^2) memory). `by_c`, when it serves the model, supplies y / C, u / C and
-/// their lagged sums.
+/// their lagged sums, and `eps` (one per record) the model's prediction errors.
 Eigen::MatrixXd jacobian_factor(const PolynomialModel& model, const std::vector<ScaledRecord>& records, Eigen::Index p,
-                                const FilteredByC* by_c = nullptr) {
-  const bool reuse = by_c && by_c->serves(model);
+                                const FilteredByC* by_c = nullptr, const std::vector<Eigen::VectorXd>* eps = nullptr) {
+  const bool reuse = by_c && by_c->serves(model) && eps && eps->size() == records.size();
   std::vector<FilteredRegressors> regressors;
   regressors.reserve(records.size());
-  for (std::size_t e = 0; e < records.size(); ++e)
-    regressors.push_back(filtered_regressors(model, records[e].u, records[e].y, true, reuse ? &by_c->signals[e] : nullptr));
+  for (std::size_t e = 0; e < records.size(); ++e) {
+    const std::vector<Eigen::VectorXd>* filtered = reuse ? &by_c->signals[e] : nullptr;
+    const Eigen::VectorXd* known_eps = reuse ? &(*eps)[e] : nullptr;
+    regressors.push_back(filtered_regressors(model, records[e].u, records[e].y, true, filtered, known_eps));
+  }
   // A record shorter than the lags has no Gram route: only the QR has rows for it.
   if (std::optional<Eigen::MatrixXd> r = gram_jacobian_factor(regressors, reuse ? &by_c->tables : nullptr))
     return std::move(*r);
@@ -434,9 +453,10 @@ bool separable(const PolynomialModel& m) {
 /// the rank that can be resolved can lie above the model's cost by rounding),
 /// and left as it is when a record is shorter than the lags or the Gram
 /// matrix is refused. `by_c` receives the filtered signals and their lagged
-/// sums (they depend on C only). Returns the model's cost afterwards.
+/// sums (they depend on C only), and `eps` (the model's prediction errors) the
+/// projected model's when it is kept. Returns the model's cost afterwards.
 double project_linear_part(PolynomialModel& model, const std::vector<ScaledRecord>& records, double cost,
-                           FilteredByC& by_c) {
+                           FilteredByC& by_c, std::vector<Eigen::VectorXd>& eps) {
   const Eigen::Index m = model.inputs();
   const Eigen::VectorXd one = Eigen::VectorXd::Ones(1);
   // Columns: -y_f(t - k), k = 1..na; u_if(t - nk_i - j), j < nb_i; then the target y_f(t).
@@ -467,9 +487,11 @@ double project_linear_part(PolynomialModel& model, const std::vector<ScaledRecor
     projected.B[k] = theta.segment(at, model.nb(i));
     at += model.nb(i);
   }
-  const double projected_cost = cost_of(projected, records);
+  std::vector<Eigen::VectorXd> projected_eps;
+  const double projected_cost = cost_of(projected, records, &projected_eps);
   if (!(projected_cost < cost)) return cost;
   model = std::move(projected);
+  eps = std::move(projected_eps);
   return projected_cost;
 }
 
@@ -494,16 +516,16 @@ class LevenbergMarquardt {
                      const PemOptions& pem_options)
       : model(start), records(scaled_records), p(parameters), options(pem_options) {
     for (const auto& r : records) samples += r.y.size();
-    cost = cost_of(model, records);
+    cost = cost_of(model, records, &eps);
     run.initial_cost = cost;
     run.cost_history.push_back(cost);
     project = options.variable_projection && separable(model);
     if (project) {
-      cost = project_linear_part(model, records, cost, by_c);
+      cost = project_linear_part(model, records, cost, by_c, eps);
       if (cost < run.initial_cost) run.cost_history.push_back(cost);
     }
     theta = pack_parameters(model);
-    run.r = jacobian_factor(model, records, p, &by_c);
+    run.r = jacobian_factor(model, records, p, &by_c, &eps);
     run.status = PemResult::Status::max_iterations;
     run.termination = "reached max_iterations (" + std::to_string(options.max_iterations) + ")";
   }
@@ -513,7 +535,7 @@ class LevenbergMarquardt {
   bool iterate() {
     if (ended_) return false;
     double& lambda = run.lambda;
-    if (need_factor) run.r = jacobian_factor(model, records, p, &by_c);
+    if (need_factor) run.r = jacobian_factor(model, records, p, &by_c, &eps);
     need_factor = false;
     const Eigen::MatrixXd& r = run.r;
     const Eigen::MatrixXd r11 = r.topLeftCorner(p, p).triangularView<Eigen::Upper>();
@@ -567,13 +589,14 @@ class LevenbergMarquardt {
       step *= fraction;
       const double predicted = 0.5 * (r12.squaredNorm() - (r11 * step + r12).squaredNorm());
       double trial_cost = std::numeric_limits<double>::infinity();
-      if (denominators_stable(trial)) trial_cost = cost_of(trial, records);
+      std::vector<Eigen::VectorXd> trial_eps;
+      if (denominators_stable(trial)) trial_cost = cost_of(trial, records, &trial_eps);
       const double rho = predicted > 0 ? (cost - trial_cost) / predicted : -1.0;
       if (std::isfinite(trial_cost) && rho > 0) {
         // The damping follows rho, the quality of the Gauss-Newton model for
         // the joint step; the projection's further gain is then taken on top.
         if (project) {
-          trial_cost = project_linear_part(trial, records, trial_cost, by_c);
+          trial_cost = project_linear_part(trial, records, trial_cost, by_c, trial_eps);
           step = pack_parameters(trial) - theta;
         }
         const double decrease = cost - trial_cost;
@@ -581,6 +604,7 @@ class LevenbergMarquardt {
         theta += step;
         model = trial;
         cost = trial_cost;
+        eps = std::move(trial_eps);
         run.cost_history.push_back(cost);
         // Nielsen (1999), but a step the quadratic model predicted well (rho > 0.75)
         // shrinks the damping tenfold: on ill-conditioned problems the damped step
@@ -648,7 +672,7 @@ class LevenbergMarquardt {
   LmRun finish() {
     run.iterations = iteration;
     run.final_cost = cost;
-    if (need_factor) run.r = jacobian_factor(model, records, p, &by_c);
+    if (need_factor) run.r = jacobian_factor(model, records, p, &by_c, &eps);
     need_factor = false;
     return run;
   }
@@ -678,6 +702,7 @@ class LevenbergMarquardt {
   double cost = 0;
   bool project = false;
   FilteredByC by_c;  // the last projection's signals, for the Jacobian factor at the same C
+  std::vector<Eigen::VectorXd> eps;  // the model's prediction errors, per record
   Eigen::VectorXd theta;
   double nu = 2.0;
   double shrink = 0.1;  // damping factor after a well-predicted step (see below)
