@@ -10,7 +10,8 @@ system_identification(..., 'ARMAX', ARMAX_mod=...) on the same estimation log,
 then scores both on the validation log the same way: simulation from rest of
 B/A u (nk 0), measured and simulated outputs through the same zero-phase
 5th-order Butterworth low-pass at 120 Hz (1.2 x the excited band), fit % as in
-DESIGN.md. Prints one RESULT line per tool and the time ratio. Peers are bench
+DESIGN.md. Prints one RESULT line per tool, the time ratio and a VERDICT; exits 1
+when the target (>= 20x, a better in-band fit, sysid converged) is not met. Peers are bench
 dependencies only (pip install sippy-unipi scipy), not project dependencies.
 """
 import argparse
@@ -88,8 +89,13 @@ def main():
     t_sippy, bs, as_, _, _ = run_sippy(u, y, a.na, a.nb, a.nc, a.sippy_mode, a.max_iterations)
     fit_sippy = in_band_fit(bs, as_, u_val, y_val, u.mean(), y.mean())
     print(f"RESULT tool=sippy mode={a.sippy_mode} wall_s={t_sippy:.3f} in_band_fit={fit_sippy:.2f}", flush=True)
-    print(f"RATIO sippy/sysid = {t_sippy / wall:.1f} (target >= 20, with a better fit)")
+    ratio = t_sippy / wall
+    print(f"RATIO sippy/sysid = {ratio:.1f} (target >= 20, with a better fit)")
+    # The issue's target as the exit status: a NaN SIPPY fit counts as worse.
+    met = status == "ok" and ratio >= 20.0 and not (fit_sippy >= fit_sysid)
+    print("VERDICT " + ("met" if met else "NOT met"))
+    return 0 if met else 1
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())
