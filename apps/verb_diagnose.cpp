@@ -8,6 +8,7 @@
 
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "cli_common.hpp"
@@ -24,7 +25,7 @@ struct DiagnoseArgs {
   int max_findings = 4;
   double significance = 0.01;
   int substeps = 0;
-  bool refit_nominal = false;
+  bool refit_nominal = false, confirm = false;
   double fit_fraction = 0.5, selection_fraction = 0.2;
   Eigen::Index min_segment = 200;
 };
@@ -157,9 +158,20 @@ void run_diagnose(const DiagnoseArgs& a) {
   o.fit_fraction = a.fit_fraction;
   o.selection_fraction = a.selection_fraction;
   o.min_segment_samples = a.min_segment;
+  std::optional<LoadedLog> other;
+  if (!a.validate.empty()) {
+    other = load_log(a.validate, make_log_options(a.log, inputs, outputs));
+    if (std::abs(other->data.Ts - log.data.Ts) > 1e-6 * log.data.Ts)
+      throw DataError(a.validate, 0, 0, "sample time differs from " + a.log_path + "'s");
+  }
   DiagnoseReport report;
   try {
-    report = diagnose(nominal, e.u, e.y, o);
+    if (a.confirm) {
+      const Experiment& v = other->data.experiments.front();
+      report = diagnose_confirmed(nominal, e.u, e.y, v.u, v.y, o);
+    } else {
+      report = diagnose(nominal, e.u, e.y, o);
+    }
   } catch (const std::invalid_argument& ex) {
     throw DataError(a.log_path, 0, 0, ex.what());  // too short a record, channel mismatch
   }
@@ -167,12 +179,13 @@ void run_diagnose(const DiagnoseArgs& a) {
   j["data"] = a.log_path;
   j["nominal"] = a.model_path;
 
-  // An independent recording, when given, is the validation the report leads with.
-  if (!a.validate.empty()) {
-    const LoadedLog other = load_log(a.validate, make_log_options(a.log, inputs, outputs));
-    if (std::abs(other.data.Ts - log.data.Ts) > 1e-6 * log.data.Ts)
-      throw DataError(a.validate, 0, 0, "sample time differs from " + a.log_path + "'s");
-    const Experiment& v = other.data.experiments.front();
+  if (a.confirm) {
+    // The library measured every fit on the confirming recording.
+    j["validation"] = a.validate + " (initial state estimated; it confirmed each finding)";
+    j["validation_file"] = a.validate;
+  } else if (other) {
+    // An independent recording, when given, is the validation the report leads with.
+    const Experiment& v = other->data.experiments.front();
     AugmentedModel plain = report.augmented;
     plain.blocks = nominal.blocks;
     const RecordingValidation fits = validate_on_recording(plain, report.augmented, v.u, v.y);
@@ -229,7 +242,7 @@ Verb register_diagnose(CLI::App& app) {
                   "residual spectra before/after with the located bands, residual energy by window, and held-out "
                   "time series (.svg or .png; needs gnuplot)")
       ->check(plot_path_validator());
-  cmd->add_option("--validate", args->validate, "an independent recording (same columns) to report the fit on");
+  CLI::Option* validate = cmd->add_option("--validate", args->validate, "an independent recording (same columns) to report the fit on");
   cmd->add_option("--max-findings", args->max_findings, "at most this many effects are added")
       ->capture_default_str()
       ->check(CLI::Range(1, 13));
@@ -245,6 +258,11 @@ Verb register_diagnose(CLI::App& app) {
                "refit the nominal's linear dynamics together with each candidate (for a nominal identified from this "
                "machine, whose poles hold a compromise of the nonlinearity); candidates are then judged against the "
                "linear dynamics refitted alone");
+  cmd->add_flag("--confirm", args->confirm,
+               "with --validate: fit and rank the candidates on the whole log and accept each round's best only if "
+               "the --validate recording confirms it (one test per round at --significance); for a short log whose "
+               "effect shows in few episodes. --fit-fraction and --selection-fraction are then not used")
+      ->needs(validate);
   cmd->add_option("--fit-fraction", args->fit_fraction, "leading part of the record that fits the candidates")
       ->capture_default_str()
       ->check(CLI::Range(0.05, 0.9));
@@ -259,7 +277,7 @@ Verb register_diagnose(CLI::App& app) {
       "ranks and accepts them (a paired test on the simulation errors), the last 30 % is\n"
       "held out from every fit and gives fit_before / fit_after (--fit-fraction,\n"
       "--selection-fraction). A record whose effect shows in few episodes needs one in each\n"
-      "of the first two parts.\n"
+      "of the first two parts, or a second recording: --validate FILE --confirm.\n"
       "Example:\n"
       "  sysid diagnose --model nominal.json log.csv --inputs u --outputs y --json report.json --out augmented.json");
   add_hold_option(*cmd);

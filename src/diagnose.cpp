@@ -23,6 +23,18 @@ double mean_fit(const Eigen::Ref<const Eigen::MatrixXd>& y, const Eigen::Ref<con
   return fit_percent(y, y_hat).mean();
 }
 
+/// (core, blocks) simulated on a recording that starts wherever the machine was
+/// (deviation coordinates), from the initial state that best explains its start
+/// (see RecordingValidation); the state used goes to `x0` when given.
+Eigen::MatrixXd simulate_from_estimated_state(const StateSpace& core, int substeps, const std::vector<PhysicsBlock>& blocks,
+                                              const Eigen::Ref<const Eigen::MatrixXd>& u,
+                                              const Eigen::Ref<const Eigen::MatrixXd>& y, Eigen::VectorXd* x0 = nullptr) {
+  const Eigen::MatrixXd residual = y - AugmentedSimulator(core, substeps, Eigen::VectorXd()).simulate(blocks, u);
+  const Eigen::VectorXd start = estimate_initial_state(core, Eigen::MatrixXd::Zero(u.rows(), core.inputs()), residual);
+  if (x0) *x0 = start;
+  return AugmentedSimulator(core, substeps, start).simulate(blocks, u);
+}
+
 /// Paired test of "the candidate does not improve the simulation" on rows
 /// [from, to): the SSE reduction D = sum_t (e_before^2 - e_after^2) against its
 /// spread under the null. With delta = y_after - y_before (fitted on other
@@ -73,8 +85,22 @@ struct Segments {
   Eigen::Index fit = 0, estimation = 0, total = 0;
 };
 
+/// An independent recording in the nominal's deviation coordinates (confirmation mode).
+struct Recording {
+  Eigen::MatrixXd u, y;
+};
+
+Recording deviation_recording(const AugmentedModel& model, const Eigen::Ref<const Eigen::MatrixXd>& u,
+                              const Eigen::Ref<const Eigen::MatrixXd>& y) {
+  Recording r{u, y};
+  if (model.input_offset.size()) r.u.rowwise() -= model.input_offset.transpose();
+  if (model.output_offset.size()) r.y.rowwise() -= model.output_offset.transpose();
+  return r;
+}
+
 void check_arguments(const AugmentedModel& nominal, const Eigen::Ref<const Eigen::MatrixXd>& u,
-                     const Eigen::Ref<const Eigen::MatrixXd>& y, const DiagnoseOptions& o, Segments& s) {
+                     const Eigen::Ref<const Eigen::MatrixXd>& y, const Recording* confirm, const DiagnoseOptions& o,
+                     Segments& s) {
   nominal.nominal.validate();
   if (!nominal.nominal.is_discrete()) throw std::invalid_argument("diagnose: need a discrete nominal model");
   if (u.rows() != y.rows()) throw std::invalid_argument("diagnose: need u.rows() == y.rows()");
@@ -87,13 +113,27 @@ void check_arguments(const AugmentedModel& nominal, const Eigen::Ref<const Eigen
       throw std::invalid_argument("diagnose: output '" +
                                   (i < static_cast<Eigen::Index>(names.size()) ? names[i] : "y" + std::to_string(i + 1)) +
                                   "' is constant (a stuck or disconnected sensor?): there is nothing to compare the simulation with");
+  if (o.max_correlation_lag < 1) throw std::invalid_argument("diagnose: need max_correlation_lag >= 1");
+  if (o.min_segment_samples < 50) throw std::invalid_argument("diagnose: need min_segment_samples >= 50");
+  s.total = y.rows();
+  if (confirm) {
+    // The whole log fits and ranks; the recording confirms and validates.
+    if (confirm->u.rows() != confirm->y.rows() || confirm->u.cols() != u.cols() || confirm->y.cols() != y.cols())
+      throw std::invalid_argument("diagnose: the confirming recording must have the log's input and output channels");
+    if (!confirm->u.allFinite() || !confirm->y.allFinite())
+      throw std::invalid_argument("diagnose: the confirming recording's values must be finite");
+    const Eigen::Index shortest = std::min(s.total, confirm->y.rows());
+    if (shortest < o.min_segment_samples)
+      throw std::invalid_argument("diagnose: need at least " + std::to_string(o.min_segment_samples) +
+                                  " samples in the log and in the confirming recording (have " + std::to_string(s.total) +
+                                  " and " + std::to_string(confirm->y.rows()) + ")");
+    s.fit = s.estimation = s.total;
+    return;
+  }
   if (!(o.fit_fraction > 0 && o.selection_fraction > 0 && o.fit_fraction + o.selection_fraction < 1))
     throw std::invalid_argument("diagnose: need fit_fraction, selection_fraction > 0 and their sum < 1");
-  if (o.max_correlation_lag < 1) throw std::invalid_argument("diagnose: need max_correlation_lag >= 1");
-  s.total = y.rows();
   s.fit = static_cast<Eigen::Index>(std::floor(o.fit_fraction * static_cast<double>(s.total)));
   s.estimation = static_cast<Eigen::Index>(std::floor((o.fit_fraction + o.selection_fraction) * static_cast<double>(s.total)));
-  if (o.min_segment_samples < 50) throw std::invalid_argument("diagnose: need min_segment_samples >= 50");
   const Eigen::Index shortest = std::min({s.fit, s.estimation - s.fit, s.total - s.estimation});
   if (shortest < o.min_segment_samples)
     throw std::invalid_argument("diagnose: need at least " + std::to_string(o.min_segment_samples) +
@@ -232,10 +272,14 @@ std::string finding_summary(const PhysicsBlock& b, const std::vector<std::string
   return "Finding of kind " + k + ".";
 }
 
-DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Eigen::MatrixXd>& u_raw,
-                        const Eigen::Ref<const Eigen::MatrixXd>& y_raw, const DiagnoseOptions& o) {
+namespace {
+
+/// diagnose() and, with `confirm` (deviation coordinates), diagnose_confirmed().
+DiagnoseReport run_diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Eigen::MatrixXd>& u_raw,
+                            const Eigen::Ref<const Eigen::MatrixXd>& y_raw, const Recording* confirm,
+                            const DiagnoseOptions& o) {
   Segments seg;
-  check_arguments(nominal, u_raw, y_raw, o, seg);
+  check_arguments(nominal, u_raw, y_raw, confirm, o, seg);
   DiagnoseReport report;
   report.warnings = record_warnings(nominal.nominal, u_raw, y_raw);
   report.fit_rows = seg.fit;
@@ -244,9 +288,8 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
   const double Ts = model.Ts;
 
   // Deviation coordinates of the nominal.
-  Eigen::MatrixXd u = u_raw, y = y_raw;
-  if (nominal.input_offset.size()) u.rowwise() -= nominal.input_offset.transpose();
-  if (nominal.output_offset.size()) y.rowwise() -= nominal.output_offset.transpose();
+  const Recording log = deviation_recording(nominal, u_raw, y_raw);
+  const Eigen::MatrixXd &u = log.u, &y = log.y;
 
   // The linear core the blocks act on: the nominal, or with refit_nominal its
   // refit after each acceptance (simulators rebuilt then).
@@ -325,25 +368,34 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
     std::vector<Candidate> candidates = propose_candidates(data, o.detection);
     if (static_cast<int>(candidates.size()) > o.candidates_per_round) candidates.resize(o.candidates_per_round);
 
-    // 3. Model and judge each on the selection segment.
+    // 3. Model and judge each on the selection segment (confirmation mode: rank
+    // on the whole log, test the best on the independent recording).
     const int tried = static_cast<int>(candidates.size());
     if (tried == 0) break;
-    const double level = o.significance / tried;  // Bonferroni over the candidates of the round
+    // Bonferroni over the candidates of the round; one test per round when confirming.
+    const double level = confirm ? o.significance : o.significance / tried;
     const double t_threshold = normal_quantile(1.0 - level);
     // With refit_nominal every candidate is fitted together with the linear core,
     // and judged against the core refitted alone on the same rows: both have seen
     // the same data, so the test asks whether the physics helps beyond a better
     // linear fit (the nominal itself may have been identified on the selection
     // segment, which would favour it).
-    Eigen::MatrixXd reference = current;
+    Eigen::MatrixXd reference = current, reference_confirm;
+    if (confirm) reference_confirm = simulate_from_estimated_state(core, current_sim.substeps(), fixed, confirm->u, confirm->y);
     if (o.refit_nominal) {
       const LinearCoreRefitResult alone = refit_core(accepted, fit_rows, current_sim.substeps());
-      if (alone.refitted) reference = simulate_refit(alone, current_sim.substeps(), seg.estimation);
-      else if (round == 1)  // e.g. too large a nominal: the candidates are judged on the nominal as given
+      if (alone.refitted) {
+        reference = simulate_refit(alone, current_sim.substeps(), seg.estimation);
+        if (confirm)
+          reference_confirm = simulate_from_estimated_state(alone.model, current_sim.substeps(),
+                                                            combine_blocks(base, alone.blocks), confirm->u, confirm->y);
+      } else if (round == 1) {  // e.g. too large a nominal: the candidates are judged on the nominal as given
         for (const auto& w : alone.warnings) report.warnings.push_back("diagnose: " + w);
+      }
     }
-    const double before_fit = mean_fit(y.middleRows(seg.fit, seg.estimation - seg.fit),
-                                       reference.middleRows(seg.fit, seg.estimation - seg.fit));
+    // Gains are measured on the selection segment, or in confirmation mode on the whole log.
+    const Eigen::Index scored_from = confirm ? 0 : seg.fit, scored = seg.estimation - scored_from;
+    const double before_fit = mean_fit(y.middleRows(scored_from, scored), reference.middleRows(scored_from, scored));
     int best = -1;
     double best_score = -std::numeric_limits<double>::infinity();
     // Candidates are independent: fit them on all cores (each thread its own NLopt
@@ -358,6 +410,8 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
       j.candidate = fitted.fitted.front();
       j.round = round;
       Eigen::MatrixXd after;
+      const StateSpace* candidate_core = &core;
+      std::vector<PhysicsBlock> blocks;
       if (o.refit_nominal) {
         std::vector<Candidate> all = accepted;
         all.push_back(j.candidate);
@@ -365,23 +419,41 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
         if (r.refitted) {
           after = simulate_refit(r, sim.substeps(), seg.estimation);
           j.candidate = r.blocks.back();
+          blocks = combine_blocks(base, r.blocks);
           refits[index] = std::move(r);
+          candidate_core = &refits[index]->model;
         }
       }
-      if (after.size() == 0) after = sim.simulate(combine_blocks(fixed, fitted.fitted), u, seg.estimation);
-      const Eigen::Index sel = seg.estimation - seg.fit;
-      j.selection_gain = mean_fit(y.middleRows(seg.fit, sel), after.middleRows(seg.fit, sel)) - before_fit;
-      j.t_statistic = improvement_z(y, reference, after, seg.fit, seg.estimation, o.max_correlation_lag);
+      if (after.size() == 0) {
+        blocks = combine_blocks(fixed, fitted.fitted);
+        after = sim.simulate(blocks, u, seg.estimation);
+      }
+      j.selection_gain = mean_fit(y.middleRows(scored_from, scored), after.middleRows(scored_from, scored)) - before_fit;
+      if (confirm) {
+        const Eigen::MatrixXd after_confirm = simulate_from_estimated_state(*candidate_core, sim.substeps(), blocks, confirm->u, confirm->y);
+        j.t_statistic = improvement_z(confirm->y, reference_confirm, after_confirm, 0, confirm->y.rows(), o.max_correlation_lag);
+      } else {
+        j.t_statistic = improvement_z(y, reference, after, seg.fit, seg.estimation, o.max_correlation_lag);
+      }
       j.t_threshold = t_threshold;
     });
+    auto penalised_gain = [&](const JudgedCandidate& j) {
+      return j.selection_gain - o.penalty_points_per_parameter * static_cast<double>(j.candidate.free.size());
+    };
     for (std::size_t index = 0; index < judged.size(); ++index) {
       JudgedCandidate& j = judged[index];
-      const double penalised = j.selection_gain - o.penalty_points_per_parameter * static_cast<double>(j.candidate.free.size());
-      j.significant = j.t_statistic > t_threshold && penalised > o.min_gain_points;
+      const double penalised = penalised_gain(j);
+      // Confirming, every candidate is eligible here; only the best-ranked one is then tested.
+      j.significant = (confirm || j.t_statistic > t_threshold) && penalised > o.min_gain_points;
       if (j.significant && penalised > best_score) {
         best_score = penalised;
         best = static_cast<int>(index);
       }
+    }
+    if (confirm) {
+      for (std::size_t index = 0; index < judged.size(); ++index)
+        judged[index].significant = static_cast<int>(index) == best && judged[index].t_statistic > t_threshold;
+      if (best >= 0 && !judged[best].significant) best = -1;  // the fixed sequence ends at its first failure
     }
     for (const auto& j : judged) report.considered.push_back(j);
     if (best < 0) break;
@@ -392,12 +464,18 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
       report.nominal_refit.applied = true;
     } else {
       accepted.push_back(judged[best].candidate);
-      accepted = fit_candidates(simulator_for(accepted, base), base, accepted, u_fit, y_fit, fit_rows, local_fit).fitted;
+      // Confirming, the model kept is the one the recording confirmed.
+      if (!confirm)
+        accepted = fit_candidates(simulator_for(accepted, base), base, accepted, u_fit, y_fit, fit_rows, local_fit).fitted;
     }
   }
 
-  // 4. Prove: refit on the whole estimation part, then score on validation.
-  if (!accepted.empty() && report.nominal_refit.applied) {
+  // 4. Prove: refit on the whole estimation part (confirming, it was fitted on
+  // the whole log already, and the recording confirmed those very models), then
+  // score on validation.
+  if (confirm) {
+    if (report.nominal_refit.applied) report.nominal_refit.poles_after = poles(core);
+  } else if (!accepted.empty() && report.nominal_refit.applied) {
     adopt(refit_core(accepted, seg.estimation, simulator_for(accepted, base).substeps()));
     report.nominal_refit.poles_after = poles(core);
   } else if (!accepted.empty()) {
@@ -406,19 +484,28 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
                    .fitted;
   }
   const Eigen::Index V = seg.total - seg.estimation;
-  const auto y_val = y.bottomRows(V);
+  // The validation fit per output of the findings so far, whose simulation of the log is `on_log`.
+  auto validation_fit = [&](const std::vector<Candidate>& set, const Eigen::MatrixXd& on_log) -> Eigen::VectorXd {
+    if (!confirm) return fit_percent(y.bottomRows(V), on_log.bottomRows(V));
+    if (set.empty())
+      return fit_percent(confirm->y, simulate_from_estimated_state(model, fine->substeps(), base, confirm->u, confirm->y));
+    return fit_percent(confirm->y, simulate_from_estimated_state(core, simulator_for(set, base).substeps(),
+                                                                 combine_blocks(base, set), confirm->u, confirm->y));
+  };
   std::vector<Candidate> so_far;
   Eigen::MatrixXd previous = y_nominal;
-  report.fit_before_per_output = fit_percent(y_val, y_nominal.bottomRows(V));
+  report.fit_before_per_output = validation_fit(so_far, y_nominal);
   report.fit_before = report.fit_before_per_output.mean();
+  Eigen::VectorXd previous_fit = report.fit_before_per_output;
   for (std::size_t k = 0; k < accepted.size(); ++k) {
     const Candidate& c = accepted[k];
     so_far.push_back(c);
     const Eigen::MatrixXd next = simulator_for(so_far, base).simulate(combine_blocks(base, so_far), u);
+    const Eigen::VectorXd next_fit = validation_fit(so_far, next);
     Finding f;
     f.candidate = c;
-    f.fit_before = mean_fit(y_val, previous.bottomRows(V));
-    f.fit_after = mean_fit(y_val, next.bottomRows(V));
+    f.fit_before = previous_fit.mean();
+    f.fit_after = next_fit.mean();
     f.selection_gain = acceptance[k].selection_gain;
     f.t_statistic = acceptance[k].t_statistic;
     f.band_hz = band_of(c.block, report.location);
@@ -426,8 +513,9 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
     f.summary = finding_summary(c.block, model.input_names, model.output_names, Ts);
     report.findings.push_back(f);
     previous = next;
+    previous_fit = next_fit;
   }
-  report.fit_after_per_output = fit_percent(y_val, previous.bottomRows(V));
+  report.fit_after_per_output = previous_fit;
   report.fit_after = report.fit_after_per_output.mean();
   report.simulated_before = y_nominal;
   report.simulated_after = previous;
@@ -436,8 +524,11 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
     report.simulated_after.rowwise() += nominal.output_offset.transpose();
   }
   std::ostringstream v;
-  v << "last " << fixed(100.0 * static_cast<double>(V) / static_cast<double>(seg.total), 3) << " % of samples (" << V << " of "
-    << seg.total << ")";
+  if (confirm)
+    v << "the independent recording (" << confirm->y.rows() << " samples, initial state estimated), which confirmed each finding";
+  else
+    v << "last " << fixed(100.0 * static_cast<double>(V) / static_cast<double>(seg.total), 3) << " % of samples (" << V
+      << " of " << seg.total << ")";
   report.validation = v.str();
 
   report.augmented = nominal;
@@ -453,16 +544,28 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
   return report;
 }
 
+}  // namespace
+
+DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Eigen::MatrixXd>& u,
+                        const Eigen::Ref<const Eigen::MatrixXd>& y, const DiagnoseOptions& options) {
+  return run_diagnose(nominal, u, y, nullptr, options);
+}
+
+DiagnoseReport diagnose_confirmed(const AugmentedModel& nominal, const Eigen::Ref<const Eigen::MatrixXd>& u,
+                                  const Eigen::Ref<const Eigen::MatrixXd>& y, const Eigen::Ref<const Eigen::MatrixXd>& u_confirm,
+                                  const Eigen::Ref<const Eigen::MatrixXd>& y_confirm, const DiagnoseOptions& options) {
+  const Recording confirm = deviation_recording(nominal, u_confirm, y_confirm);
+  return run_diagnose(nominal, u, y, &confirm, options);
+}
+
 namespace {
 
 /// The model simulated from the initial state that best explains the start of y
 /// (see RecordingValidation); returns the fit per output and sets model.x0.
 Eigen::VectorXd fit_from_estimated_state(AugmentedModel& model, const Eigen::Ref<const Eigen::MatrixXd>& u,
                                          const Eigen::Ref<const Eigen::MatrixXd>& y) {
-  model.x0.resize(0);
-  const Eigen::MatrixXd residual = y - simulate_augmented(model, u);
-  model.x0 = estimate_initial_state(model.nominal, Eigen::MatrixXd::Zero(u.rows(), model.nominal.inputs()), residual);
-  return fit_percent(y, simulate_augmented(model, u));
+  const Recording r = deviation_recording(model, u, y);
+  return fit_percent(r.y, simulate_from_estimated_state(model.nominal, model.substeps, model.blocks, r.u, r.y, &model.x0));
 }
 
 }  // namespace

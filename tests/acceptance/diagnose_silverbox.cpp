@@ -18,6 +18,8 @@
 #include <filesystem>
 #include <iostream>
 
+#include "../support/diagnose_cases.hpp"
+
 namespace test_acceptance_diagnose_silverbox {
 
 namespace {
@@ -47,11 +49,7 @@ TEST(DiagnoseSilverbox, NamesCubicStiffnessAndBeatsThePublishedBaselines) {
   est.output_names = {"y"};
   est.add_experiment({u_est, y_est, "silverbox estimation"});
   const sysid::N4sidResult linear = sysid::n4sid(est, no);
-  sysid::AugmentedModel nominal;
-  nominal.nominal = linear.model;
-  nominal.x0 = linear.x0;
-  nominal.input_offset = linear.input_offset;
-  nominal.output_offset = linear.output_offset;
+  const sysid::AugmentedModel nominal = sysid::test::nominal_from(linear);
 
   const sysid::DiagnoseReport report = sysid::diagnose(nominal, u_est, y_est);
   ASSERT_FALSE(report.findings.empty());

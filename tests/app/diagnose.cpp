@@ -2,7 +2,8 @@
 // with nothing hidden, one with a dead zone), the augmented model it writes run
 // through `sysid show` and `sysid simulate`, and the ways a run must fail: bad
 // input files (exit 2, the file named), contradictory outputs (exit 1), an input
-// never overwritten, no half-written output.
+// never overwritten, no half-written output; --validate with and without
+// --confirm.
 #include <sysid/io/csv.hpp>
 
 #include <gtest/gtest.h>
@@ -260,6 +261,47 @@ TEST(DiagnoseApp, ValidateOnAnIndependentRecordingLeadsTheReport) {
   EXPECT_EQ(r.exit_code, 2) << describe(r);
   EXPECT_TRUE(contains(r.err, "sample time")) << r.err;
   EXPECT_FALSE(std::filesystem::exists(tmp / "report.json"));
+}
+
+TEST(DiagnoseApp, ConfirmFitsOnTheLogAndAcceptsOnlyWhatTheRecordingConfirms) {
+  // --confirm: the whole first file fits and ranks; the second recording tests
+  // each round's best candidate and gives the fits. Dead zone and null scenario,
+  // each cut in two (14 000 + 6 000 samples).
+  TempDir tmp;
+  for (const std::string scenario : {"stage_deadzone", "null_arm"}) {
+    const std::string dir = kSuite + scenario + "/";
+    const sysid::CsvTable log = sysid::read_csv(dir + "log.csv");
+    sysid::write_csv(tmp / (scenario + "_first.csv"), log.names, log.values.topRows(14000));
+    sysid::write_csv(tmp / (scenario + "_second.csv"), log.names, log.values.bottomRows(6000));
+    const std::string report_path = tmp / (scenario + ".json");
+    const CliResult r = run_cli({"diagnose", "--model", dir + "nominal.json", tmp / (scenario + "_first.csv"), "--inputs", "u",
+                                 "--outputs", "y", "--validate", tmp / (scenario + "_second.csv"), "--confirm", "--json",
+                                 report_path});
+    ASSERT_EQ(r.exit_code, 0) << describe(r);
+    const json report = read_json(report_path);
+    EXPECT_TRUE(contains(report["validation"].get<std::string>(), "confirmed each finding")) << report["validation"];
+    EXPECT_EQ(report["validation_file"], tmp / (scenario + "_second.csv"));
+    EXPECT_FALSE(report.contains("held_out_segment"));  // no segment of the first file was held out
+    const double before = report["fit_before"].get<double>(), after = report["fit_after"].get<double>();
+    if (scenario == "null_arm") {
+      EXPECT_TRUE(report["findings"].empty()) << r.out;
+      EXPECT_EQ(before, after);
+      continue;
+    }
+    ASSERT_FALSE(report["findings"].empty()) << r.out;
+    EXPECT_EQ(report["findings"][0]["kind"], "deadzone") << r.out;
+    EXPECT_GE(after - before, 3.0) << r.out;
+    // Findings and candidates: the accepted one passed the one-test threshold.
+    const json& first = report["findings"][0];
+    EXPECT_GT(first["evidence"]["t_statistic"].get<double>(), 2.3263) << first.dump(2);
+  }
+  // --confirm without a recording to confirm on is a usage error; nothing written.
+  const std::string dir = kSuite + "null_arm/";
+  const CliResult r = run_cli({"diagnose", "--model", dir + "nominal.json", dir + "log.csv", "--inputs", "u", "--outputs", "y",
+                               "--confirm", "--json", tmp / "lonely.json"});
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
+  EXPECT_TRUE(contains(r.err, "--validate")) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(tmp / "lonely.json"));
 }
 
 }  // namespace test_app_diagnose

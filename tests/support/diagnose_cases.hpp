@@ -1,10 +1,13 @@
 #pragma once
-// Test and bench support for diagnose: a physics block from a parameter list, a
-// two-mode collocated structure and an excitation with velocity reversals and a
-// spread of amplitudes (used by tests/unit/diagnose_*.cpp,
-// tests/unit/io_augmented_model_file.cpp and bench/diagnose_bench.cpp).
+// Test and bench support for diagnose: a physics block from a parameter list, an
+// identified model as a nominal, a two-mode collocated structure and an
+// excitation with velocity reversals and a spread of amplitudes (used by tests/unit/diagnose_*.cpp,
+// tests/unit/io_augmented_model_file.cpp, tests/acceptance/diagnose_*.cpp and
+// bench/diagnose_bench.cpp).
 #include <sysid/core/discretize.hpp>
+#include <sysid/diagnose/augmented_model.hpp>
 #include <sysid/diagnose/physics_block.hpp>
+#include <sysid/subspace/n4sid.hpp>
 
 #include <Eigen/Dense>
 #include <cmath>
@@ -25,6 +28,16 @@ inline PhysicsBlock physics_block(const std::string& kind, std::map<std::string,
   b.input = input;
   b.output = output;
   return b;
+}
+
+/// An identified linear model as diagnose's nominal: its x0 and offsets kept.
+inline AugmentedModel nominal_from(const N4sidResult& identified) {
+  AugmentedModel nominal;
+  nominal.nominal = identified.model;
+  nominal.x0 = identified.x0;
+  nominal.input_offset = identified.input_offset;
+  nominal.output_offset = identified.output_offset;
+  return nominal;
 }
 
 /// Two-mode structure (f1 = 25 Hz, damping 0.02; f2 = 34 Hz, 0.015 by default)

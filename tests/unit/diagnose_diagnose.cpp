@@ -13,6 +13,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "../support/diagnose_cases.hpp"
@@ -221,6 +222,64 @@ TEST(ValidateOnRecording, EstimatesTheStateTheRecordingStartsIn) {
   EXPECT_LT(moved.fit_after(0), 90.0);  // the wrong modes fit worse
   other.nominal = make_mimo_case({}, 0.0, 1).nominal.nominal;  // other channels
   EXPECT_THROW(sysid::validate_on_recording(c.nominal, other, u, y), std::invalid_argument);
+}
+
+// Confirmation mode: the log fits and ranks, an independent recording confirms.
+// The data are cut in two as a machine's two runs would be: 14 000 samples to
+// diagnose, the 6 000 after them (starting wherever the structure was) to confirm.
+
+TEST(DiagnoseConfirmed, CorrectNominalGivesNoFinding) {
+  for (std::uint64_t seed : {1u, 2u}) {
+    const Case c = make_case({}, 0.05, seed);
+    const sysid::DiagnoseReport r =
+        sysid::diagnose_confirmed(c.nominal, c.u.topRows(14000), c.y.topRows(14000), c.u.bottomRows(6000), c.y.bottomRows(6000));
+    EXPECT_TRUE(r.findings.empty()) << "seed " << seed << ": " << (r.findings.empty() ? "" : r.findings[0].summary);
+    EXPECT_NEAR(r.fit_after, r.fit_before, 1e-12);
+    EXPECT_GT(r.fit_before, 99.0);  // the right model, from the state the recording starts in
+    ASSERT_FALSE(r.considered.empty());
+    // One test per round, at the full level: the threshold is the 1 % normal quantile.
+    EXPECT_NEAR(r.considered.front().t_threshold, 2.3263, 1e-3);
+  }
+}
+
+TEST(DiagnoseConfirmed, FindsCubicStiffnessAndTheRecordingConfirmsIt) {
+  const StateSpace s = structure();
+  const MatrixXd u = excitation(20000, 3);
+  const double ymax = sysid::simulate(s, u).cwiseAbs().maxCoeff();
+  const double k3 = 0.5 * 1e4 / (ymax * ymax * ymax);
+  const Case c = make_case({physics_block("cubic_stiffness", {{"coefficient", k3}, {"linear_coefficient", 0.0}})}, 0.03, 3);
+  const sysid::DiagnoseReport r =
+      sysid::diagnose_confirmed(c.nominal, c.u.topRows(14000), c.y.topRows(14000), c.u.bottomRows(6000), c.y.bottomRows(6000));
+  ASSERT_FALSE(r.findings.empty());
+  EXPECT_EQ(r.findings[0].candidate.block.kind, "cubic_stiffness") << r.findings[0].summary;
+  EXPECT_NEAR(r.findings[0].candidate.block.param("coefficient") / k3, 1.0, 0.05);
+  EXPECT_GE(r.fit_after - r.fit_before, 1.0);
+  EXPECT_NE(r.validation.find("independent recording (6000 samples"), std::string::npos) << r.validation;
+  // Each round tests only its best-ranked candidate: at most one is significant
+  // per round, and it is the one with the largest penalised in-sample gain.
+  for (int round = 1; round <= 4; ++round) {
+    int significant = 0;
+    for (const auto& j : r.considered) significant += j.round == round && j.significant;
+    EXPECT_LE(significant, 1) << "round " << round;
+  }
+  EXPECT_GT(r.findings[0].t_statistic, r.considered.front().t_threshold);
+  // The fits reported are those of the recording: the same as validate_on_recording's.
+  const sysid::RecordingValidation v = sysid::validate_on_recording(c.nominal, r.augmented, c.u.bottomRows(6000), c.y.bottomRows(6000));
+  EXPECT_NEAR(v.fit_before(0), r.fit_before, 1e-9);
+  EXPECT_NEAR(v.fit_after(0), r.fit_after, 1e-9);
+}
+
+TEST(DiagnoseConfirmed, RejectsRecordingsThatCannotConfirm) {
+  const Case c = make_case({}, 0.05, 6);
+  const MatrixXd u = c.u.topRows(14000), y = c.y.topRows(14000);
+  EXPECT_THROW(sysid::diagnose_confirmed(c.nominal, u, y, c.u.bottomRows(100), c.y.bottomRows(100)), std::invalid_argument);
+  EXPECT_THROW(sysid::diagnose_confirmed(c.nominal, u, y, c.u.bottomRows(6000), c.y.bottomRows(5000)), std::invalid_argument);
+  EXPECT_THROW(sysid::diagnose_confirmed(c.nominal, u, y, c.u.bottomRows(6000), MatrixXd::Zero(6000, 2)), std::invalid_argument);
+  MatrixXd broken = c.y.bottomRows(6000);
+  broken(10, 0) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(sysid::diagnose_confirmed(c.nominal, u, y, c.u.bottomRows(6000), broken), std::invalid_argument);
+  EXPECT_THROW(sysid::diagnose_confirmed(c.nominal, u.topRows(100), y.topRows(100), c.u.bottomRows(6000), c.y.bottomRows(6000)),
+               std::invalid_argument);
 }
 
 TEST(Diagnose, RejectsTooShortRecords) {

@@ -29,6 +29,23 @@
 ///     in the order found.
 /// A correct nominal model yields no findings unless a test fires by chance
 /// (probability about `significance` per round).
+///
+/// Confirmation mode (diagnose_confirmed, `sysid diagnose --validate FILE
+/// --confirm`), for a short record whose effect shows in few episodes (the
+/// cascaded tanks overflow twice in 1 024 samples: cut in three, no segment
+/// holds enough of it). A second, independent recording takes the place of the
+/// selection and validation segments:
+///  - every candidate is fitted on the whole log and ranked there by its
+///    in-sample gain, penalised per parameter;
+///  - only the best-ranked one is tested, once, on the independent recording
+///    (the same paired test, each model simulated from the initial state that
+///    best explains the recording's start), at the full `significance`;
+///  - the first candidate that fails ends the search. Because the order comes
+///    from the log alone, the rounds are a fixed-sequence procedure: the chance
+///    of any false finding stays below `significance` with no Bonferroni
+///    division (Westfall and Krishen, J. Stat. Plan. Inference 99 (2001)).
+/// The recording is never fitted: fit_before / fit_after are measured on it,
+/// with the very models it confirmed (no refit after acceptance).
 #include <Eigen/Dense>
 #include <optional>
 #include <string>
@@ -81,8 +98,13 @@ struct NominalRefit {
 /// A candidate after fitting, with its judgement on the selection segment.
 struct JudgedCandidate {
   Candidate candidate;         ///< fitted parameters
-  double selection_gain = 0;   ///< fit points gained on the selection segment (mean over outputs)
-  double t_statistic = 0;      ///< standardised held-out SSE reduction (z)
+  /// Fit points gained on the selection segment (mean over outputs); in
+  /// confirmation mode, on the whole log (in-sample: the ranking).
+  double selection_gain = 0;
+  /// Standardised held-out SSE reduction (z): on the selection segment, or in
+  /// confirmation mode on the independent recording (only the best-ranked
+  /// candidate of a round is tested there; the others' values are for reading).
+  double t_statistic = 0;
   double t_threshold = 0;      ///< what it had to exceed
   bool significant = false;
   int round = 0;
@@ -119,6 +141,17 @@ struct DiagnoseReport {
 /// min_segment_samples (>= 50) samples in every segment.
 DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Eigen::MatrixXd>& u,
                         const Eigen::Ref<const Eigen::MatrixXd>& y, const DiagnoseOptions& options = {});
+
+/// Confirmation mode (see the file comment): fits on the whole log (u, y), tests
+/// each round's best-ranked candidate once on the independent recording
+/// (u_confirm, y_confirm: raw, the same channels and sample time), and reports
+/// fit_before / fit_after on that recording. fit_fraction and
+/// selection_fraction are not used.
+/// Preconditions (std::invalid_argument): as diagnose(), with at least
+/// min_segment_samples samples in the log and in the recording, finite values.
+DiagnoseReport diagnose_confirmed(const AugmentedModel& nominal, const Eigen::Ref<const Eigen::MatrixXd>& u,
+                                  const Eigen::Ref<const Eigen::MatrixXd>& y, const Eigen::Ref<const Eigen::MatrixXd>& u_confirm,
+                                  const Eigen::Ref<const Eigen::MatrixXd>& y_confirm, const DiagnoseOptions& options = {});
 
 /// The nominal's and the augmented model's fit on an independent recording (the
 /// `--validate` file): per output, %, each model simulated from its own initial
