@@ -45,7 +45,13 @@
 ///    of any false finding stays below `significance` with no Bonferroni
 ///    division (Westfall and Krishen, J. Stat. Plan. Inference 99 (2001)).
 /// The recording is never fitted: fit_before / fit_after are measured on it,
-/// with the very models it confirmed (no refit after acceptance).
+/// with the very models it confirmed (no refit after acceptance). The only
+/// numbers taken from it are each model's initial state (n per model, by
+/// estimate_initial_state), since it starts wherever the machine was.
+/// Calibration: the test's noise autocovariance is Bartlett-tapered (see
+/// improvement_z), which underestimates the long-run variance of very
+/// persistent noise; with noise correlated over 1/15 of the recording, 2 % of
+/// null runs gave a finding at the 1 % level, as in the three-part mode (README).
 #include <Eigen/Dense>
 #include <optional>
 #include <string>
