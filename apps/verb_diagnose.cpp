@@ -215,7 +215,8 @@ void run_diagnose(const DiagnoseArgs& a) {
   if (!a.plot.empty()) plot_diagnose(a, log, report, outputs);
   if (!a.out.empty()) {
     nlohmann::json provenance = {{"method", "diagnose"}, {"nominal", a.model_path}, {"data", a.log_path},
-                                 {"fit_percent", report.fit_after}, {"validation", report.validation}};
+                                 {"fit_percent", report.fit_after},
+                                 {"validation", a.confirm ? j["validation"].get<std::string>() : report.validation}};
     write_model_json(a.out, augmented_model_to_file(report.augmented, provenance));
     note(verb, "wrote the " + std::string(report.findings.empty() ? "(unchanged) nominal" : "augmented") + " model to " + a.out);
   }

@@ -276,12 +276,16 @@ TEST(DiagnoseApp, ConfirmFitsOnTheLogAndAcceptsOnlyWhatTheRecordingConfirms) {
     const std::string report_path = tmp / (scenario + ".json");
     const CliResult r = run_cli({"diagnose", "--model", dir + "nominal.json", tmp / (scenario + "_first.csv"), "--inputs", "u",
                                  "--outputs", "y", "--validate", tmp / (scenario + "_second.csv"), "--confirm", "--json",
-                                 report_path});
+                                 report_path, "--out", tmp / (scenario + "_model.json")});
     ASSERT_EQ(r.exit_code, 0) << describe(r);
     const json report = read_json(report_path);
     EXPECT_TRUE(contains(report["validation"].get<std::string>(), "confirmed each finding")) << report["validation"];
     EXPECT_EQ(report["validation_file"], tmp / (scenario + "_second.csv"));
     EXPECT_FALSE(report.contains("held_out_segment"));  // no segment of the first file was held out
+    // The written model says where its fit was measured.
+    const json model = read_json(tmp / (scenario + "_model.json"));
+    EXPECT_EQ(model["provenance"]["validation"], report["validation"]);
+    EXPECT_EQ(model["provenance"]["fit_percent"], report["fit_after"]);
     const double before = report["fit_before"].get<double>(), after = report["fit_after"].get<double>();
     if (scenario == "null_arm") {
       EXPECT_TRUE(report["findings"].empty()) << r.out;

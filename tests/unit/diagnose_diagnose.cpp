@@ -235,7 +235,9 @@ TEST(DiagnoseConfirmed, CorrectNominalGivesNoFinding) {
         sysid::diagnose_confirmed(c.nominal, c.u.topRows(14000), c.y.topRows(14000), c.u.bottomRows(6000), c.y.bottomRows(6000));
     EXPECT_TRUE(r.findings.empty()) << "seed " << seed << ": " << (r.findings.empty() ? "" : r.findings[0].summary);
     EXPECT_NEAR(r.fit_after, r.fit_before, 1e-12);
-    EXPECT_GT(r.fit_before, 99.0);  // the right model, from the state the recording starts in
+    // The right model from the state the recording starts in: only the noise
+    // (5 % of the output RMS) is left, a fit of about 95 %.
+    EXPECT_GT(r.fit_before, 94.0);
     ASSERT_FALSE(r.considered.empty());
     // One test per round, at the full level: the threshold is the 1 % normal quantile.
     EXPECT_NEAR(r.considered.front().t_threshold, 2.3263, 1e-3);
