@@ -1,6 +1,6 @@
 // sysid check: pre-flight report on a log before any identification
-// (validate/data_check.hpp).
-#include <sysid/validate/data_check.hpp>
+// (diagnose/data_check.hpp).
+#include <sysid/diagnose/data_check.hpp>
 
 #include <iostream>
 #include <limits>

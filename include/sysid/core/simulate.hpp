@@ -16,7 +16,7 @@
 /// Preconditions: Ts > 0 (discrete model), u.cols() == m, x0 empty or of size n.
 /// Numerical aspects: O(N (n^2 + n m + l n + l m)) flops; the recursion is the
 /// textbook one, so an unstable model grows as it should and nothing is clipped.
-#include <sysid/core/detail/real_modal_form.hpp>
+#include <sysid/core/real_modal_form.hpp>
 #include <sysid/core/state_space.hpp>
 
 #include <Eigen/Dense>
@@ -111,7 +111,7 @@ void simulate_in_blocks(const Eigen::Ref<const Eigen::MatrixXd>& u, const Eigen:
 }
 
 /// A discrete model in its A's real modal coordinates x = T x_m
-/// (core/detail/real_modal_form.hpp): x_m[k+1] = A_m x_m[k] + B_m u[k],
+/// (core/real_modal_form.hpp): x_m[k+1] = A_m x_m[k] + B_m u[k],
 /// y = C_m x_m + D u with B_m = T^-1 B, C_m = C T.
 struct ModalRecursion {
   ModalBlockLists Am;
@@ -153,7 +153,7 @@ void simulate_blockwise(const StateSpace& sys, const Eigen::MatrixBase<Derived>&
 /// dependency chain of one 2x2 rotation, instead of an n x n product
 /// (n = 10, SISO, 40 000 samples: 0.52 ms against simulate's 0.79-0.87 ms; n4sid's
 /// estimation fit uses it).
-/// Method: x = T x_m with T from core/detail/real_modal_form.hpp; the model
+/// Method: x = T x_m with T from core/real_modal_form.hpp; the model
 /// simulated is (A_m, T^-1 B, C T, D) from x_m[0] = T^-1 x0, which differs from
 /// (A, B, C, D) by the eigensolver's backward error, about eps cond(T) ||A||.
 /// When A has no real modal form with cond(T) <= modal_condition_limit (a

@@ -21,7 +21,7 @@
 ///
 /// krylov: ONE real Cholesky factorisation of K - sigma0 M for the whole sweep, a
 /// block Lanczos basis of the shift-invert operator and a projected solve per
-/// frequency (fem/detail/krylov_sweep.hpp), for proportional damping only (none,
+/// frequency (src/fem/detail/krylov_sweep.hpp), for proportional damping only (none,
 /// Rayleigh, a modal ratio; std::invalid_argument with a damping matrix). Each
 /// frequency's response is accepted only if an estimate of its error at every
 /// output (from the Lanczos relation, free of the round-off that swamps the
@@ -66,7 +66,7 @@ SparseFrfMethod sparse_frf_method_from_name(const std::string& name);
 struct SparseFrfOptions {
   SparseFrfMethod method = SparseFrfMethod::automatic;  ///< see the file comment
   /// krylov: the largest estimated relative error accepted for an output entry
-  /// (fem/detail/krylov_sweep.hpp).
+  /// (src/fem/detail/krylov_sweep.hpp).
   double krylov_tolerance = 1e-8;
   /// krylov: at most this many basis columns (memory: 8 x dofs x krylov_max_basis
   /// bytes; 160 MB for 50 000 DOFs).

@@ -69,7 +69,7 @@ struct GramianFactors {
 namespace detail {
 
 /// The dense cores of controllability_gramian_factor / observability_gramian_factor
-/// (compiled once in src/gramians.cpp; the templates only evaluate their arguments).
+/// (compiled once in src/reduce/gramians.cpp; the templates only evaluate their arguments).
 Eigen::MatrixXd controllability_gramian_factor_impl(const Eigen::MatrixXd& A, const Eigen::MatrixXd& B, bool discrete);
 Eigen::MatrixXd observability_gramian_factor_impl(const Eigen::MatrixXd& A, const Eigen::MatrixXd& C, bool discrete);
 

@@ -25,7 +25,7 @@
 ///    constant zero, collinear inputs), where the Gram route declines.
 ///
 ///  - Modal coordinates. In the real modal form A = T A_m T^-1
-///    (core/detail/real_modal_form.hpp; A_m block diagonal with 1x1 and 2x2
+///    (core/real_modal_form.hpp; A_m block diagonal with 1x1 and 2x2
 ///    blocks) the recursion costs O(n) per input and sample instead of O(n^2):
 ///    B = T B_m, x0 = T x0_m are fitted for (A_m, C T). Used when cond(T) is at
 ///    most `modal_condition_limit`: the change of coordinates then costs at most

@@ -67,7 +67,7 @@ Eigen::MatrixXd lagged_sums(const MX& x, const MY& y, Eigen::Index i2, Eigen::In
 /// carry no dependency on each other: tiles of up to 16 of them keep their
 /// partial sums in vector registers over a block. The portable build also holds
 /// the kernel compiled for AVX2 + FMA and for AVX-512, chosen at run time by the
-/// processor's features (src/lagged_sums.cpp); every kernel returns the same bits.
+/// processor's features (src/core/lagged_sums.cpp); every kernel returns the same bits.
 void correlate_double_double(const double* a, const double* b, Eigen::Index count, Eigen::Index lags,
                              DoubleDouble* out);
 /// The same sums by the kernel without FMA (Dekker's product), whatever the
