@@ -8,6 +8,7 @@ packages=(
   libeigen3-dev libsuitesparse-dev libspectra-dev libnlopt-cxx-dev libcli11-dev
   nlohmann-json3-dev libfast-float-dev googletest libgtest-dev libbenchmark-dev
   gnuplot-nox
+  python3  # scripts/check-layering.py
   clang libclang-rt-14-dev  # libFuzzer targets (tests/fuzz, scripts/fuzz-smoke.sh)
 )
 

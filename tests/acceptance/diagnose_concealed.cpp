@@ -14,8 +14,10 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "../support/run_cli.hpp"
+#include "../support/sanitizers.hpp"
 
 namespace test_acceptance_diagnose_concealed {
 
@@ -98,12 +100,20 @@ TEST_P(Concealed, DiagnoseNamesTheHiddenPhysicsAndImprovesTheHeldOutFit) {
   EXPECT_NEAR(fit, report["fit_after"].get<double>(), 1e-6);
 }
 
-INSTANTIATE_TEST_SUITE_P(Suite, Concealed,
-                         ::testing::Values("arm_missing_mode", "arm_time_delay", "isolator_time_delay2", "isolator_input_lag",
-                                           "arm_gain_error", "stage_coulomb_friction", "arm_cubic_stiffness",
-                                           "stage_backlash", "stage_deadzone", "isolator_saturation", "isolator_hysteresis",
-                                           "isolator_hum", "stage_offset_drift", "stage_friction_and_hum", "stage_relief_valve", "null_arm",
-                                           "null_isolator"));
+/// Every scenario in the optimised build. Under the sanitizers (10-20 times slower)
+/// four of them: diagnose fits every candidate kind on every log, so each covers
+/// all the detectors and fits; these four add a linear effect on the arm, two
+/// effects on the stage, hysteresis on the isolator and a null case.
+std::vector<std::string> scenarios() {
+  if (sysid::test::kSanitized) return {"arm_missing_mode", "stage_friction_and_hum", "isolator_hysteresis", "null_arm"};
+  return {"arm_missing_mode", "arm_time_delay", "isolator_time_delay2", "isolator_input_lag",
+          "arm_gain_error", "stage_coulomb_friction", "arm_cubic_stiffness",
+          "stage_backlash", "stage_deadzone", "isolator_saturation", "isolator_hysteresis",
+          "isolator_hum", "stage_offset_drift", "stage_friction_and_hum", "stage_relief_valve", "null_arm",
+          "null_isolator"};
+}
+
+INSTANTIATE_TEST_SUITE_P(Suite, Concealed, ::testing::ValuesIn(scenarios()));
 
 }  // namespace
 
