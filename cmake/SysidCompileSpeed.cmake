@@ -2,7 +2,7 @@
 # the tests, the data generators, the benchmarks); none of them reaches the
 # installed package's interface, so a consumer compiles exactly as before.
 #
-# sysid_compile_fast(<target> [PCH <header>...] [REUSE_PCH_FROM <target>])
+# sysid_compile_fast(<target> [PCH <header>...] [SHARE_PCH <group>])
 #   - every translation unit of <target> sees src/core/detail/eigen_instances.hpp
 #     first: the heavy Eigen decompositions are declared `extern template` there
 #     and compiled once, in the library (src/core/eigen_instances.cpp), instead of
@@ -10,19 +10,27 @@
 #   - with SYSID_PRECOMPILED_HEADERS (default ON), that header, Eigen and the
 #     <header>s given are a precompiled header, so Eigen (and GoogleTest, CLI11,
 #     nlohmann/json for the targets that list them) is parsed once per target
-#     instead of once per unit; REUSE_PCH_FROM shares one precompiled header among
-#     targets compiled with the same flags (the test executables, the generators).
+#     instead of once per unit; SHARE_PCH <group> shares one precompiled header
+#     among the targets of a group, all compiled with the same flags (the test
+#     executables, the data generators): the group's first target builds it, the
+#     others reuse it.
 option(SYSID_PRECOMPILED_HEADERS "Precompile Eigen and the shared third-party headers of each target" ON)
 
 set(SYSID_EIGEN_INSTANCES_HEADER ${PROJECT_SOURCE_DIR}/src/core/detail/eigen_instances.hpp)
 
 function(sysid_compile_fast target)
-  cmake_parse_arguments(arg "" "REUSE_PCH_FROM" "PCH" ${ARGN})
+  cmake_parse_arguments(arg "" "SHARE_PCH" "PCH" ${ARGN})
   if(NOT SYSID_PRECOMPILED_HEADERS)
     target_compile_options(${target} PRIVATE "SHELL:-include ${SYSID_EIGEN_INSTANCES_HEADER}")
-  elseif(arg_REUSE_PCH_FROM)
-    target_precompile_headers(${target} REUSE_FROM ${arg_REUSE_PCH_FROM})
-  else()
-    target_precompile_headers(${target} PRIVATE ${SYSID_EIGEN_INSTANCES_HEADER} ${arg_PCH})
+    return()
   endif()
+  if(arg_SHARE_PCH)
+    get_property(owner GLOBAL PROPERTY SYSID_PCH_OWNER_${arg_SHARE_PCH})
+    if(owner)
+      target_precompile_headers(${target} REUSE_FROM ${owner})
+      return()
+    endif()
+    set_property(GLOBAL PROPERTY SYSID_PCH_OWNER_${arg_SHARE_PCH} ${target})
+  endif()
+  target_precompile_headers(${target} PRIVATE ${SYSID_EIGEN_INSTANCES_HEADER} ${arg_PCH})
 endfunction()
