@@ -19,8 +19,7 @@ constexpr int kSkippedExitCode = 77;
 
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
+  // RUN_ALL_TESTS is nonzero on any failure, ad hoc ones (outside a test) included.
   if (RUN_ALL_TESTS() != 0) return 1;
-  const testing::UnitTest& run = *testing::UnitTest::GetInstance();
-  if (run.failed_test_count() > 0 || run.ad_hoc_test_result().Failed()) return 1;
-  return run.skipped_test_count() > 0 ? kSkippedExitCode : 0;
+  return testing::UnitTest::GetInstance()->skipped_test_count() > 0 ? kSkippedExitCode : 0;
 }
