@@ -3,6 +3,7 @@
 #include <sysid/io/atomic_file.hpp>
 #include <sysid/io/csv.hpp>
 #include <sysid/io/polynomial_model_file.hpp>
+#include <sysid/core/format_lags.hpp>
 #include <sysid/validate/residual_analysis.hpp>
 
 #include <algorithm>

@@ -14,7 +14,7 @@
 #include "sysid/core/persistent_excitation.hpp"
 #include "sysid/pem/arx.hpp"
 #include "sysid/signal/polynomial_filter.hpp"
-#include "sysid/spectral/confidence.hpp"
+#include "sysid/core/distributions.hpp"
 #include "sysid/validate/residual_analysis.hpp"
 
 namespace sysid {

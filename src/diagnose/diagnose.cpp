@@ -11,7 +11,7 @@
 #include "sysid/core/identification_warnings.hpp"
 #include "sysid/core/parallel_for.hpp"
 #include "sysid/core/poles_zeros.hpp"
-#include "sysid/spectral/confidence.hpp"
+#include "sysid/core/distributions.hpp"
 #include "sysid/validate/compare.hpp"
 #include "sysid/validate/fit.hpp"
 

@@ -78,24 +78,6 @@ bool has(const sysid::MismatchLocation& loc, const std::string& fired) {
 
 // ---------------------------------------------------------------------------
 
-TEST(MismatchLocationStats, BetaAndFDistributions) {
-  // I_{1/2}(2, 3) = 1 - (C(4,0) + C(4,1)) / 16 = 11/16 (binomial identity).
-  EXPECT_NEAR(sysid::detail::regularized_beta(2.0, 3.0, 0.5), 11.0 / 16.0, 1e-13);
-  // I_x(1, b) = 1 - (1 - x)^b.
-  EXPECT_NEAR(sysid::detail::regularized_beta(1.0, 7.5, 0.2), 1.0 - std::pow(0.8, 7.5), 1e-13);
-  // Table values: F_{0.95}(5, 10) = 3.3258, t_{0.995}(30)^2 = 2.7500^2 = 7.5625.
-  EXPECT_NEAR(sysid::detail::f_upper_quantile(0.05, 5.0, 10.0), 3.3258, 2e-4);
-  EXPECT_NEAR(sysid::detail::f_upper_quantile(0.01, 1.0, 30.0), 2.7500 * 2.7500, 2e-3);
-  EXPECT_NEAR(sysid::detail::f_sf(3.3258, 5.0, 10.0), 0.05, 1e-5);
-  // Large denominator degrees of freedom: F(1, inf) = chi2(1), 3.8415 at 5 %.
-  EXPECT_NEAR(sysid::detail::f_upper_quantile(0.05, 1.0, 1e6), 3.8415, 2e-3);
-  // Beta(m, b) upper quantile against the closed form for m = 1.
-  const double c = sysid::detail::beta_upper_quantile(1e-5, 1.0, 16.0);
-  EXPECT_NEAR(std::pow(1.0 - c, 16.0), 1e-5, 1e-12);
-  const double c2 = sysid::detail::beta_upper_quantile(1e-3, 2.0, 12.5);
-  EXPECT_NEAR(sysid::detail::regularized_beta(12.5, 2.0, 1.0 - c2), 1e-3, 1e-9);
-}
-
 // A correct nominal model: residual = measurement noise independent of u, white or
 // coloured (AR(1), pole 0.95: correlation time 20 samples). The family-wise level is
 // 1 % per run and the families are Bonferroni-combined, so each run raises a false

@@ -1,6 +1,8 @@
-// Residual analysis: chi-square distribution, sample correlations, bounds valid
-// for coloured signals, Ljung-Box, verdicts, and the residuals of a model.
+// Residual analysis: sample correlations, bounds valid for coloured signals,
+// Ljung-Box, verdicts, and the residuals of a model (the chi-square distribution
+// behind the p-values is tested in core_distributions.cpp).
 #include <sysid/core/discrete_riccati.hpp>
+#include <sysid/core/distributions.hpp>
 #include <sysid/core/simulate.hpp>
 #include <sysid/validate/residual_analysis.hpp>
 
@@ -30,87 +32,7 @@ Eigen::VectorXd ar1(Eigen::Index N, double a, std::uint64_t seed) {
   return x;
 }
 
-/// Q(n, x) for integer n: e^{-x} sum_{k<n} x^k / k! (Abramowitz & Stegun 6.5.13).
-double q_integer(int n, double x) {
-  double term = 1.0, sum = 1.0;
-  for (int k = 1; k < n; ++k) {
-    term *= x / k;
-    sum += term;
-  }
-  return std::exp(-x) * sum;
-}
-
-/// Q(k + 1/2, x) = erfc(sqrt x) + e^{-x} sum_{j<k} x^{j+1/2} / Gamma(j + 3/2) (A&S 6.5.13 with 6.5.22 recurrence).
-double q_half_integer(int k, double x) {
-  double s = std::erfc(std::sqrt(x));
-  for (int j = 0; j < k; ++j) s += std::exp(-x + (j + 0.5) * std::log(x) - std::lgamma(j + 1.5));
-  return s;
-}
-
 }  // namespace
-
-// ---- the chi-square distribution -------------------------------------------
-
-TEST(IncompleteGamma, ClosedFormsForSmallShapes) {
-  // P(1, x) = 1 - e^{-x}; P(1/2, x) = erf(sqrt x) (A&S 6.5.17). Both branches
-  // (series x < a + 1, continued fraction beyond) are exercised.
-  for (double x : {1e-8, 1e-3, 0.3, 1.0, 1.99, 2.01, 5.0, 30.0}) {
-    EXPECT_NEAR(regularized_gamma_p(1.0, x), -std::expm1(-x), 1e-15 + 2e-14 * -std::expm1(-x)) << x;
-    EXPECT_NEAR(regularized_gamma_q(1.0, x) / std::exp(-x), 1.0, 1e-13) << x;
-    EXPECT_NEAR(regularized_gamma_p(0.5, x), std::erf(std::sqrt(x)), 1e-14) << x;
-    EXPECT_NEAR(regularized_gamma_q(0.5, x) / std::erfc(std::sqrt(x)), 1.0, 1e-12) << x;
-  }
-  EXPECT_EQ(regularized_gamma_p(3.0, 0.0), 0.0);
-  EXPECT_EQ(regularized_gamma_q(3.0, 0.0), 1.0);
-  EXPECT_EQ(regularized_gamma_p(3.0, std::numeric_limits<double>::infinity()), 1.0);
-}
-
-TEST(IncompleteGamma, IntegerAndHalfIntegerShapesAgainstFiniteSums) {
-  // The finite sums are exact formulas evaluated with positive terms (relative
-  // error ~ n eps); the tolerance 1e-11 relative allows for the prefactor
-  // exp(a ln x - x - lnGamma(a)), whose argument of size ~a loses ~a eps.
-  for (int n = 1; n <= 60; n += 3) {
-    for (double f : {0.05, 0.5, 0.9, 1.0, 1.1, 1.5, 2.0, 3.0}) {
-      const double x = f * n + (f > 1.0 ? 2.0 : 0.0);
-      const double q = q_integer(n, x);
-      EXPECT_NEAR(regularized_gamma_q(n, x) / q, 1.0, 1e-11) << "n " << n << " x " << x;
-      EXPECT_NEAR(regularized_gamma_p(n, x), 1.0 - q, 1e-13) << "n " << n << " x " << x;
-      const double qh = q_half_integer(n, x);
-      EXPECT_NEAR(regularized_gamma_q(n + 0.5, x) / qh, 1.0, 1e-11) << "n+1/2 " << n << " x " << x;
-    }
-  }
-  // Far tail: Q(10, 200) = e^{-200} sum_{k<10} 200^k/k! ~ 5e-70, kept to full relative accuracy.
-  EXPECT_NEAR(regularized_gamma_q(10.0, 200.0) / q_integer(10, 200.0), 1.0, 1e-12);
-}
-
-TEST(ChiSquare, KnownQuantilesAndTails) {
-  // Textbook quantiles (values to 16 digits as given by SciPy 1.17 chi2.ppf; the
-  // 1-dof one is also z_{0.975}^2 = 1.959963984540054^2).
-  EXPECT_NEAR(chi_square_cdf(3.841458820694124, 1), 0.95, 1e-13);
-  EXPECT_NEAR(chi_square_cdf(44.31410489621915, 25), 0.99, 1e-13);
-  EXPECT_NEAR(chi_square_cdf(11.52397537224934, 25), 0.01, 1e-13);
-  EXPECT_NEAR(chi_square_cdf(0.5, 3), 0.08110858834532418, 1e-14);
-  // Upper tails (p-values) keep their relative accuracy: SciPy chi2.sf.
-  EXPECT_NEAR(chi_square_sf(100.0, 25) / 6.274266201376244e-11, 1.0, 1e-10);
-  EXPECT_NEAR(chi_square_sf(300.0, 20) / 8.082849629775851e-52, 1.0, 1e-10);
-  // 1 dof: P(X > z^2) = P(|Z| > z) = erfc(z / sqrt 2).
-  for (double z : {0.1, 1.0, 2.575829303548901, 6.0})
-    EXPECT_NEAR(chi_square_sf(z * z, 1) / std::erfc(z / std::numbers::sqrt2), 1.0, 1e-12) << z;
-  // 2 dof: exponential with mean 2.
-  for (double x : {0.01, 1.0, 7.0, 50.0}) EXPECT_NEAR(chi_square_sf(x, 2) / std::exp(-x / 2), 1.0, 1e-13) << x;
-  for (double x : {0.2, 5.0, 40.0}) EXPECT_NEAR(chi_square_cdf(x, 17) + chi_square_sf(x, 17), 1.0, 1e-14);
-}
-
-TEST(ChiSquare, BadArgumentsThrow) {
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_THROW(regularized_gamma_p(0.0, 1.0), std::invalid_argument);
-  EXPECT_THROW(regularized_gamma_p(-1.0, 1.0), std::invalid_argument);
-  EXPECT_THROW(regularized_gamma_q(1.0, -1.0), std::invalid_argument);
-  EXPECT_THROW(regularized_gamma_q(1.0, nan), std::invalid_argument);
-  EXPECT_THROW(regularized_gamma_p(nan, 1.0), std::invalid_argument);
-  EXPECT_THROW(chi_square_cdf(1.0, 0.0), std::invalid_argument);
-  EXPECT_THROW(chi_square_sf(-0.5, 3.0), std::invalid_argument);
-}
 
 // ---- sample correlations ------------------------------------------------------
 

@@ -119,6 +119,11 @@
 /// local floor fits (their F quantiles memoised on the dof), plus one H1 fit with
 /// m + p inputs for test 8 (shared by the outputs); N = 20000, nfft = 2048: ~30 ms
 /// per output.
+///
+/// Implementation: src/diagnose/mismatch_location.cpp (the driver),
+/// mismatch_tests_spectral.cpp (tests 1, 2 and 8), mismatch_tests_time.cpp (tests
+/// 3-7), mismatch_spectral_variance.cpp (the variance of linear functionals); the
+/// Beta and F distributions of the tests are in core/distributions.hpp.
 #include <sysid/spectral/welch.hpp>
 #include <sysid/spectral/window.hpp>
 
@@ -276,17 +281,6 @@ struct MismatchLocation {
 };
 
 namespace detail {
-
-/// Regularised incomplete beta function I_x(a, b) (A&S 26.5.8 continued fraction,
-/// modified Lentz; the symmetry I_x(a, b) = 1 - I_{1-x}(b, a) for x > (a+1)/(a+b+2)).
-/// Preconditions: a, b > 0, 0 <= x <= 1.
-double regularized_beta(double a, double b, double x);
-/// c with P(Beta(a, b) > c) = p (bisection on I_c). Preconditions: 0 < p < 1, a, b > 0.
-double beta_upper_quantile(double p, double a, double b);
-/// x with P(F(d1, d2) > x) = p. Preconditions: 0 < p < 1, d1, d2 > 0.
-double f_upper_quantile(double p, double d1, double d2);
-/// P(F(d1, d2) > x). Preconditions: d1, d2 > 0; x >= 0.
-double f_sf(double x, double d1, double d2);
 
 MismatchLocation locate_mismatch_impl(const Eigen::MatrixXd& u, const Eigen::MatrixXd& y, const Eigen::MatrixXd& residual,
                                       const Eigen::MatrixXd& y_nominal, double Ts, const MismatchLocationOptions& options);

@@ -8,7 +8,8 @@
 ///   eps = D/C (A y - sum_i B_i/F_i u_i(t - nk_i))   (Ljung 1999, eq. 4.33, 7.12).
 ///
 /// Method:
-///  - Levenberg-Marquardt on the Gauss-Newton model of V (J. J. Moré, "The
+///  - Levenberg-Marquardt (core/levenberg_marquardt.hpp, with the prediction-error
+///    cost as its Problem) on the Gauss-Newton model of V (J. J. Moré, "The
 ///    Levenberg-Marquardt algorithm: implementation and theory", LNM 630, 1978;
 ///    the accept/reject and damping update of Nielsen 1999 as in Ceres'
 ///    tiny_solver). The Jacobian is analytic: filtered regressors (Ljung 1999,

@@ -48,7 +48,7 @@
 ///   summed G_uu is well conditioned).
 #include <sysid/core/io_data.hpp>
 #include <sysid/core/median.hpp>
-#include <sysid/spectral/confidence.hpp>
+#include <sysid/core/distributions.hpp>
 #include <sysid/spectral/welch.hpp>
 
 #include <Eigen/Dense>

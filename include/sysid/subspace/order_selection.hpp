@@ -27,7 +27,7 @@
 /// it does (subspace/n4sid.hpp).
 ///
 /// Preconditions: singular values sorted descending, 1 <= max_order < size.
-#include <sysid/validate/residual_analysis.hpp>
+#include <sysid/core/distributions.hpp>
 
 #include <Eigen/Dense>
 #include <cmath>

@@ -7,8 +7,6 @@
 /// independent of the past residuals, i.e. no feedback)?
 ///
 /// Contents:
-/// - regularized_gamma_p/q, chi_square_cdf/sf: the chi-square distribution for the
-///   p-value of the Ljung-Box statistic;
 /// - sample_correlation: normalised sample cross-correlation at a range of lags;
 /// - model_residuals: e(t) = y(t) - y^(t|t-1) of a model on a record (the
 ///   innovation-form one-step predictor of compare.hpp; with no K, the simulation
@@ -16,127 +14,27 @@
 /// - analyze_residuals: autocorrelations, residual-input cross-correlations with
 ///   confidence bounds valid for coloured signals, Ljung-Box, verdicts in words.
 ///
+/// The chi-square distribution behind the Ljung-Box p-value is in
+/// core/distributions.hpp, the lag lists of the verdicts in core/format_lags.hpp;
+/// model_residuals and analyze_residuals are compiled in
+/// src/validate/residual_analysis.cpp.
+///
 /// Lag convention (Ljung eq. 16.61-16.62 form): r_eu(tau) correlates e(t + tau)
 /// with u(t). tau > 0: the input leads the residual (dynamics from u the model
 /// missed); tau < 0: the residual leads the input (output feedback into u).
-#include <sysid/core/errors.hpp>
-#include <sysid/core/format_number.hpp>
 #include <sysid/core/io_data.hpp>
 #include <sysid/core/state_space.hpp>
-#include <sysid/spectral/confidence.hpp>
 #include <sysid/validate/compare.hpp>
 
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <limits>
+#include <cstdlib>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace sysid {
-
-// ---------------------------------------------------------------------------
-// The chi-square distribution
-// ---------------------------------------------------------------------------
-
-namespace detail {
-
-/// exp(-x + a ln x - lnGamma(a)): the common prefactor of the series and the
-/// continued fraction (computed in logs: x^a and Gamma(a) overflow separately
-/// long before their ratio does).
-inline double gamma_prefactor(double a, double x) { return std::exp(-x + a * std::log(x) - std::lgamma(a)); }
-
-/// P(a, x) by its power series (Abramowitz & Stegun 6.5.29):
-///   gamma(a, x) = e^{-x} x^a sum_{n>=0} x^n / (a (a+1) ... (a+n)).
-/// Used for x < a + 1, where the term ratio x / (a + n) < 1 from n = 1 on, so the
-/// sum converges geometrically and every term is positive (no cancellation).
-inline double gamma_p_series(double a, double x) {
-  double term = 1.0 / a, sum = term;
-  for (int n = 1; n < 100000; ++n) {
-    term *= x / (a + n);
-    sum += term;
-    if (term < sum * std::numeric_limits<double>::epsilon()) return sum * gamma_prefactor(a, x);
-  }
-  throw NumericalError("regularized_gamma_p: the series did not converge (a = " + std::to_string(a) +
-                       ", x = " + std::to_string(x) + ")");
-}
-
-/// Q(a, x) by Legendre's continued fraction (A&S 6.5.31, in the even form
-///   Gamma(a, x) = e^{-x} x^a (1/(x+1-a-) 1(1-a)/(x+3-a-) 2(2-a)/(x+5-a-) ...)),
-/// evaluated forward by the modified Lentz method (Lentz, Appl. Opt. 15 (1976)
-/// 668; Thompson & Barnett, J. Comput. Phys. 64 (1986) 490): every convergent is
-/// available without back-substitution, and zero denominators are nudged to
-/// `tiny`. Used for x >= a + 1, where it converges in O(sqrt(a)) steps.
-inline double gamma_q_continued_fraction(double a, double x) {
-  constexpr double tiny = 1e-300;
-  const double eps = std::numeric_limits<double>::epsilon();
-  double b = x + 1.0 - a;
-  double c = 1.0 / tiny, d = 1.0 / b, h = d;
-  for (int i = 1; i < 100000; ++i) {
-    const double an = -i * (i - a);
-    b += 2.0;
-    d = an * d + b;
-    if (std::abs(d) < tiny) d = tiny;
-    c = b + an / c;
-    if (std::abs(c) < tiny) c = tiny;
-    d = 1.0 / d;
-    const double delta = d * c;
-    h *= delta;
-    if (std::abs(delta - 1.0) < eps) return h * gamma_prefactor(a, x);
-  }
-  throw NumericalError("regularized_gamma_q: the continued fraction did not converge (a = " + std::to_string(a) +
-                       ", x = " + std::to_string(x) + ")");
-}
-
-inline void check_gamma_args(double a, double x, const char* who) {
-  if (!(a > 0.0) || !std::isfinite(a)) throw std::invalid_argument(std::string(who) + ": need 0 < a < infinity");
-  if (!(x >= 0.0)) throw std::invalid_argument(std::string(who) + ": need x >= 0");
-}
-
-}  // namespace detail
-
-/// Purpose: the regularized lower incomplete gamma function
-///   P(a, x) = gamma(a, x) / Gamma(a) = (1/Gamma(a)) int_0^x t^{a-1} e^{-t} dt.
-/// Method: power series for x < a + 1, 1 - continued fraction otherwise (see the
-/// detail functions; the split is where both converge fast and the one computed
-/// directly is the smaller of P and Q, so neither loses digits to 1 - (~1)).
-/// Preconditions: 0 < a < inf, x >= 0 (x = +inf gives 1); std::invalid_argument.
-/// Numerical aspects: relative accuracy ~1e-14 for a up to ~1e3 (the prefactor
-/// exp(a ln x - x - lnGamma(a)) loses ~|a ln x| eps); O(sqrt(a) + 1) work.
-inline double regularized_gamma_p(double a, double x) {
-  detail::check_gamma_args(a, x, "regularized_gamma_p");
-  if (x == 0.0) return 0.0;
-  if (std::isinf(x)) return 1.0;
-  return x < a + 1.0 ? detail::gamma_p_series(a, x) : 1.0 - detail::gamma_q_continued_fraction(a, x);
-}
-
-/// Purpose: the regularized upper incomplete gamma function Q(a, x) = 1 - P(a, x),
-/// computed directly in its tail (x >= a + 1), so tiny upper tails (p-values such
-/// as 1e-30) keep their relative accuracy. Preconditions as regularized_gamma_p.
-inline double regularized_gamma_q(double a, double x) {
-  detail::check_gamma_args(a, x, "regularized_gamma_q");
-  if (x == 0.0) return 1.0;
-  if (std::isinf(x)) return 0.0;
-  return x < a + 1.0 ? 1.0 - detail::gamma_p_series(a, x) : detail::gamma_q_continued_fraction(a, x);
-}
-
-/// Chi-square CDF with `dof` degrees of freedom: P(X <= x) = P(dof/2, x/2).
-/// Preconditions: dof > 0, x >= 0 (std::invalid_argument).
-inline double chi_square_cdf(double x, double dof) {
-  if (!(dof > 0.0) || !std::isfinite(dof)) throw std::invalid_argument("chi_square_cdf: need 0 < dof < infinity");
-  if (!(x >= 0.0)) throw std::invalid_argument("chi_square_cdf: need x >= 0");
-  return regularized_gamma_p(0.5 * dof, 0.5 * x);
-}
-
-/// Chi-square survival function (upper tail, the p-value of a statistic x):
-/// P(X > x) = Q(dof/2, x/2). Preconditions as chi_square_cdf.
-inline double chi_square_sf(double x, double dof) {
-  if (!(dof > 0.0) || !std::isfinite(dof)) throw std::invalid_argument("chi_square_sf: need 0 < dof < infinity");
-  if (!(x >= 0.0)) throw std::invalid_argument("chi_square_sf: need x >= 0");
-  return regularized_gamma_q(0.5 * dof, 0.5 * x);
-}
 
 // ---------------------------------------------------------------------------
 // Sample correlations
@@ -210,12 +108,8 @@ Eigen::VectorXd sample_correlation(const Eigen::MatrixBase<DX>& x, const Eigen::
 /// correlations; with K the predictor forgets x0 at the rate of A - K C anyway).
 /// Preconditions: as compare(); options.predict_steps is overridden.
 /// Returns N x l, in the units of the log's outputs.
-inline Eigen::MatrixXd model_residuals(const StateSpace& sys, const Eigen::MatrixXd& K, const Experiment& data,
-                                       CompareOptions options = {}) {
-  options.predict_steps = K.size() == 0 ? 0 : 1;
-  const CompareResult r = compare(sys, K, data, options);
-  return data.y - r.y_hat;
-}
+Eigen::MatrixXd model_residuals(const StateSpace& sys, const Eigen::MatrixXd& K, const Experiment& data,
+                                CompareOptions options = {});
 
 // ---------------------------------------------------------------------------
 // Residual analysis
@@ -288,35 +182,6 @@ struct ResidualAnalysisResult {
   std::vector<std::string> warnings;
 };
 
-namespace detail {
-
-/// "3, 7" / "-2..4" / "1..3, 7": runs of three or more consecutive lags as ranges.
-inline std::string format_lags(const std::vector<Eigen::Index>& lags) {
-  std::string s;
-  for (std::size_t i = 0; i < lags.size();) {
-    std::size_t j = i;
-    while (j + 1 < lags.size() && lags[j + 1] == lags[j] + 1) ++j;
-    if (!s.empty()) s += ", ";
-    if (j - i >= 2) {
-      s += std::to_string(lags[i]) + ".." + std::to_string(lags[j]);
-    } else {
-      for (std::size_t k = i; k <= j; ++k) s += (k > i ? ", " : "") + std::to_string(lags[k]);
-    }
-    i = j + 1;
-  }
-  return s;
-}
-
-inline std::string lag_word(const std::vector<Eigen::Index>& lags) { return lags.size() == 1 ? "lag " : "lags "; }
-
-inline std::string percent(double confidence) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g %%", 100.0 * confidence);
-  return buf;
-}
-
-}  // namespace detail
-
 /// Purpose: residual analysis of a model: whiteness of each output's residual and
 /// its independence of each input, with bounds, the Ljung-Box test and verdicts.
 ///
@@ -367,223 +232,9 @@ inline std::string percent(double confidence) {
 /// bound z rms / sqrt(N) (an offset the model does not explain; meaningful when
 /// the residual is white); a non-positive estimated variance factor.
 /// Example: `ResidualAnalysisResult r = analyze_residuals(model_residuals(sys, K, exp), exp.u);`
-template <class DE, class DU>
-ResidualAnalysisResult analyze_residuals(const Eigen::MatrixBase<DE>& e_in, const Eigen::MatrixBase<DU>& u_in,
-                                         const ResidualAnalysisOptions& options = {}) {
-  const Eigen::MatrixXd e = e_in, u = u_in;
-  const Eigen::Index N = e.rows(), l = e.cols(), m = u.cols(), M = options.max_lag;
-  if (l < 1) throw std::invalid_argument("analyze_residuals: need at least 1 residual channel");
-  if (u.rows() != N && !(m == 0))
-    throw std::invalid_argument("analyze_residuals: need u.rows() == e.rows() (" + std::to_string(u.rows()) +
-                                " != " + std::to_string(N) + ")");
-  if (M < 1) throw std::invalid_argument("analyze_residuals: need max_lag >= 1");
-  if (N <= M)
-    throw std::invalid_argument("analyze_residuals: need samples > max_lag (" + std::to_string(N) +
-                                " <= " + std::to_string(M) + ")");
-  if (!(options.confidence > 0.0 && options.confidence < 1.0))
-    throw std::invalid_argument("analyze_residuals: need 0 < confidence < 1");
-  const Eigen::Index h = options.ljung_box_lags == 0 ? M : options.ljung_box_lags;
-  if (h < 1 || h >= N) throw std::invalid_argument("analyze_residuals: need 1 <= ljung_box_lags < samples");
-  if (options.noise_parameters < 0 || options.noise_parameters >= h)
-    throw std::invalid_argument("analyze_residuals: need 0 <= noise_parameters < ljung_box_lags (" +
-                                std::to_string(options.noise_parameters) + " vs " + std::to_string(h) + ")");
-  if (options.variance_lags < 0 || options.variance_lags >= N)
-    throw std::invalid_argument("analyze_residuals: need 0 <= variance_lags < samples");
-  if (!options.output_names.empty() && static_cast<Eigen::Index>(options.output_names.size()) != l)
-    throw std::invalid_argument("analyze_residuals: need output_names empty or of size " + std::to_string(l));
-  if (!options.input_names.empty() && static_cast<Eigen::Index>(options.input_names.size()) != m)
-    throw std::invalid_argument("analyze_residuals: need input_names empty or of size " + std::to_string(m));
-  if (!e.allFinite()) throw std::invalid_argument("analyze_residuals: need finite residuals");
-  if (!u.allFinite()) throw std::invalid_argument("analyze_residuals: need finite inputs");
-
-  const double alpha = 1.0 - options.confidence;
-  const double sqrt_n = std::sqrt(static_cast<double>(N));
-  const Eigen::Index K = std::min<Eigen::Index>(options.variance_lags == 0 ? std::max<Eigen::Index>(M, 25)
-                                                                           : options.variance_lags,
-                                                N - 1);
-  const Eigen::Index auto_lags = std::max({M, h, K});  // autocorrelations needed by any part
-
-  auto out_name = [&](Eigen::Index i) {
-    return options.output_names.empty() ? "y" + std::to_string(i + 1) : options.output_names[i];
-  };
-  auto in_name = [&](Eigen::Index j) {
-    return options.input_names.empty() ? "u" + std::to_string(j + 1) : options.input_names[j];
-  };
-
-  ResidualAnalysisResult r;
-  r.samples = N;
-  r.max_lag = M;
-  r.confidence = options.confidence;
-  r.z = normal_quantile(1.0 - alpha / 2.0);
-  r.autocorrelation_bound = r.z / sqrt_n;
-  if (N < 10 * M)
-    r.warnings.push_back("only " + std::to_string(N) + " samples for lags up to " + std::to_string(M) +
-                         ": the bounds are asymptotic (N >> max_lag) and rough here");
-
-  // Centred channels, and their full autocorrelations up to auto_lags.
-  Eigen::MatrixXd ec = e, uc = u;
-  r.mean = e.colwise().mean().transpose();
-  ec.rowwise() -= r.mean.transpose();
-  if (m > 0) uc.rowwise() -= u.colwise().mean();
-  r.rms = (ec.colwise().squaredNorm() / static_cast<double>(N)).cwiseSqrt().transpose();
-  Eigen::MatrixXd acf_e(auto_lags + 1, l), acf_u(auto_lags + 1, m);
-  for (Eigen::Index i = 0; i < l; ++i) {
-    acf_e.col(i) = sample_correlation(ec.col(i), ec.col(i), 0, auto_lags);
-    if (!(r.rms(i) > 0.0)) {
-      r.warnings.push_back("the residual of " + out_name(i) + " is constant: its correlations are undefined (reported as 0)");
-    } else if (std::abs(r.mean(i)) > r.z * r.rms(i) / sqrt_n) {
-      r.warnings.push_back("the residual of " + out_name(i) + " has a mean of " + format_number(r.mean(i), 2) +
-                           " (" + format_number(r.mean(i) / r.rms(i), 2) +
-                           " rms), outside its bound: an offset the model does not explain");
-    }
-  }
-  for (Eigen::Index j = 0; j < m; ++j) {
-    acf_u.col(j) = sample_correlation(uc.col(j), uc.col(j), 0, auto_lags);
-    if (acf_u(0, j) == 0.0)
-      r.warnings.push_back("input " + in_name(j) + " is constant: its cross-correlation is undefined (reported as 0)");
-  }
-  r.autocorrelation = acf_e.topRows(M + 1);
-
-  // Residual correlations between outputs (the diagonal is the autocorrelation).
-  r.output_correlation.assign(static_cast<std::size_t>(M + 1), Eigen::MatrixXd::Zero(l, l));
-  for (Eigen::Index i = 0; i < l; ++i)
-    for (Eigen::Index j = 0; j < l; ++j) {
-      const Eigen::VectorXd c = i == j ? Eigen::VectorXd(acf_e.col(i).head(M + 1)) : sample_correlation(ec.col(i), ec.col(j), 0, M);
-      for (Eigen::Index tau = 0; tau <= M; ++tau) r.output_correlation[static_cast<std::size_t>(tau)](i, j) = c(tau);
-    }
-
-  // Residual-input cross-correlations with Bartlett's variance factor.
-  r.input_correlation.resize(2 * M + 1, l * m);
-  r.input_correlation_bound.resize(l * m);
-  r.input_variance_factor.resize(l * m);
-  for (Eigen::Index i = 0; i < l; ++i)
-    for (Eigen::Index j = 0; j < m; ++j) {
-      const Eigen::Index col = i * m + j;
-      r.input_correlation.col(col) = sample_correlation(ec.col(i), uc.col(j), -M, M);
-      // P = sum_{|k|<=K} r_e(k) r_u(k) = 1 + 2 sum_{k=1}^K r_e(k) r_u(k).
-      double P = 1.0 + 2.0 * acf_e.col(i).segment(1, K).dot(acf_u.col(j).segment(1, K));
-      if (!(P > 0.0)) {
-        // The truncated sum of sample products can dip below zero only when both
-        // signals have large oscillating correlations; the Bartlett-weighted sum
-        // (a spectral estimate at frequency 0, never negative) replaces it.
-        double Pb = 1.0;
-        for (Eigen::Index k = 1; k <= K; ++k)
-          Pb += 2.0 * (1.0 - static_cast<double>(k) / static_cast<double>(K + 1)) * acf_e(k, i) * acf_u(k, j);
-        r.warnings.push_back("variance factor for " + out_name(i) + " vs " + in_name(j) +
-                             " was not positive with rectangular truncation; the Bartlett-weighted sum was used");
-        P = Pb > 0.0 ? Pb : 1.0;
-      }
-      r.input_variance_factor(col) = P;
-      r.input_correlation_bound(col) = r.z * std::sqrt(P) / sqrt_n;
-    }
-
-  // Ljung-Box.
-  r.ljung_box_lags = h;
-  r.ljung_box_dof = static_cast<double>(h - options.noise_parameters);
-  r.ljung_box_q.resize(l);
-  r.ljung_box_p.resize(l);
-  const double nd = static_cast<double>(N);
-  for (Eigen::Index i = 0; i < l; ++i) {
-    double s = 0.0;
-    for (Eigen::Index k = 1; k <= h; ++k) s += acf_e(k, i) * acf_e(k, i) / (nd - static_cast<double>(k));
-    r.ljung_box_q(i) = nd * (nd + 2.0) * s;
-    r.ljung_box_p(i) = chi_square_sf(r.ljung_box_q(i), r.ljung_box_dof);
-  }
-
-  // Verdicts.
-  const double z_sim_auto = normal_quantile(1.0 - alpha / (2.0 * static_cast<double>(M)));
-  const double z_sim_cross = normal_quantile(1.0 - alpha / (2.0 * static_cast<double>(2 * M + 1)));
-  const std::string pct = detail::percent(options.confidence);
-  r.verdicts.resize(static_cast<std::size_t>(l));
-  for (Eigen::Index i = 0; i < l; ++i) {
-    ResidualVerdict& v = r.verdicts[static_cast<std::size_t>(i)];
-    bool strong = false;
-    for (Eigen::Index tau = 1; tau <= M; ++tau) {
-      const double a = std::abs(acf_e(tau, i));
-      if (a > r.autocorrelation_bound) v.lags_outside.push_back(tau);
-      if (a > z_sim_auto / sqrt_n) strong = true;
-    }
-    v.output_lags_outside.assign(static_cast<std::size_t>(l), {});
-    bool strong_cross = false;
-    for (Eigen::Index j = 0; j < l; ++j) {
-      if (j == i) continue;
-      for (Eigen::Index tau = 1; tau <= M; ++tau) {
-        const double a = std::abs(r.output_correlation[static_cast<std::size_t>(tau)](i, j));
-        if (a > r.autocorrelation_bound) v.output_lags_outside[static_cast<std::size_t>(j)].push_back(tau);
-        if (a > z_sim_auto / sqrt_n) strong_cross = true;
-      }
-    }
-    const bool lb_rejects = r.ljung_box_p(i) < alpha;
-    v.white = !(lb_rejects || strong || strong_cross);
-    const std::string lb_text = "Ljung-Box p = " + format_number(r.ljung_box_p(i), 2);
-    if (v.white) {
-      v.whiteness = "white";
-      if (!v.lags_outside.empty())
-        v.whiteness += " (autocorrelation outside the " + pct + " bound only at " + detail::lag_word(v.lags_outside) +
-                       detail::format_lags(v.lags_outside) + ", as chance allows among " + std::to_string(M) + " lags)";
-    } else {
-      std::vector<std::string> why;
-      if (!v.lags_outside.empty())
-        why.push_back("autocorrelation outside the " + pct + " bound at " + detail::lag_word(v.lags_outside) +
-                      detail::format_lags(v.lags_outside));
-      if (lb_rejects) why.push_back(lb_text + " < " + format_number(alpha, 2));
-      for (Eigen::Index j = 0; j < l; ++j) {
-        const auto& lags = v.output_lags_outside[static_cast<std::size_t>(j)];
-        if (!lags.empty())
-          why.push_back("correlated with the earlier residual of " + out_name(j) + " at " + detail::lag_word(lags) +
-                        detail::format_lags(lags));
-      }
-      v.whiteness = "not white: ";
-      for (std::size_t k = 0; k < why.size(); ++k) v.whiteness += (k ? "; " : "") + why[k];
-    }
-
-    v.independent.assign(static_cast<std::size_t>(m), true);
-    v.input_lags_outside.assign(static_cast<std::size_t>(m), {});
-    v.independence.assign(static_cast<std::size_t>(m), "");
-    for (Eigen::Index j = 0; j < m; ++j) {
-      const Eigen::Index col = i * m + j;
-      auto& lags = v.input_lags_outside[static_cast<std::size_t>(j)];
-      const double sigma = std::sqrt(r.input_variance_factor(col)) / sqrt_n;
-      bool dependent = false;
-      for (Eigen::Index tau = -M; tau <= M; ++tau) {
-        const double a = std::abs(r.input_correlation(tau + M, col));
-        if (a > r.input_correlation_bound(col)) lags.push_back(tau);
-        if (a > z_sim_cross * sigma) dependent = true;
-      }
-      v.independent[static_cast<std::size_t>(j)] = !dependent;
-      std::string& text = v.independence[static_cast<std::size_t>(j)];
-      if (acf_u(0, j) == 0.0) {
-        text = "not tested against input " + in_name(j) + " (constant over the record)";
-      } else if (!dependent) {
-        text = "independent of input " + in_name(j);
-        if (!lags.empty())
-          text += " (outside the " + pct + " bound only at " + detail::lag_word(lags) + detail::format_lags(lags) +
-                  ", as chance allows among " + std::to_string(2 * M + 1) + " lags)";
-      } else {
-        text = "correlated with input " + in_name(j) + " at " + detail::lag_word(lags) + detail::format_lags(lags);
-        Eigen::Index peak = 0;
-        r.input_correlation.col(col).cwiseAbs().maxCoeff(&peak);
-        peak -= M;
-        const bool negative = std::any_of(lags.begin(), lags.end(), [](Eigen::Index t) { return t < 0; });
-        const bool positive = std::any_of(lags.begin(), lags.end(), [](Eigen::Index t) { return t >= 0; });
-        // A coloured input spreads a correlation at one lag over its neighbours on
-        // both sides (r_eu = g * r_uu), so negative lags next to a positive peak
-        // are not by themselves evidence of feedback, and vice versa.
-        text += " (peak at lag " + std::to_string(peak) + "; ";
-        if (positive && !negative)
-          text += "lags >= 0: input dynamics the model misses)";
-        else if (negative && !positive)
-          text += "lags < 0: the residual leads the input: feedback)";
-        else if (peak >= 0)
-          text += "lags >= 0: input dynamics the model misses; the negative lags may be its spread through a coloured "
-                  "input, or feedback)";
-        else
-          text += "lags < 0: the residual leads the input: feedback; the lags >= 0 may be its spread through a coloured "
-                  "input, or input dynamics the model misses)";
-      }
-    }
-  }
-  return r;
-}
+/// (Any Eigen expression converts to the MatrixXd arguments; the analysis works on
+/// copies of e and u anyway.)
+ResidualAnalysisResult analyze_residuals(const Eigen::MatrixXd& e, const Eigen::MatrixXd& u,
+                                         const ResidualAnalysisOptions& options = {});
 
 }  // namespace sysid
