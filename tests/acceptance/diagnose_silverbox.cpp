@@ -7,6 +7,12 @@
 // excluded) from the linear model's ~14 mV to below 1.4 mV — below every
 // published black-box baseline (LSTM 2.68, GRU 2.80, deep state-space encoder
 // 1.41 mV).
+//
+// Under the sanitizers (tests/support/sanitizers.hpp) diagnose sees the first
+// 15 000 samples of the estimation multisine instead of 65 062: the same code
+// paths and the same assertions, at a quarter of the cost (measured with the
+// optimised build: 12 000 samples still name cubic_stiffness first and reach
+// 0.50 mV on the arrow, against 0.45 mV with the whole record).
 #include <sysid/core/simulate.hpp>
 #include <sysid/diagnose/diagnose.hpp>
 #include <sysid/io/csv.hpp>
@@ -19,6 +25,7 @@
 #include <iostream>
 
 #include "../support/diagnose_cases.hpp"
+#include "../support/sanitizers.hpp"
 
 namespace test_acceptance_diagnose_silverbox {
 
@@ -38,7 +45,8 @@ TEST(DiagnoseSilverbox, NamesCubicStiffnessAndBeatsThePublishedBaselines) {
   lo.outputs = {"y"};
   const sysid::IoData all = sysid::read_log(kSilverbox, lo);
   const auto& e = all.experiments.front();
-  const Eigen::MatrixXd u_est = e.u.middleRows(40650, 65062), y_est = e.y.middleRows(40650, 65062);
+  const Eigen::Index estimation_samples = sysid::test::kSanitized ? 15000 : 65062;
+  const Eigen::MatrixXd u_est = e.u.middleRows(40650, estimation_samples), y_est = e.y.middleRows(40650, estimation_samples);
   const Eigen::MatrixXd u_test = e.u.middleRows(100, 40475), y_test = e.y.middleRows(100, 40475);
 
   sysid::N4sidOptions no;

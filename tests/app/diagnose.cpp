@@ -14,6 +14,7 @@
 #include <string>
 
 #include "run_cli.hpp"
+#include "sanitizers.hpp"
 
 namespace test_app_diagnose {
 
@@ -98,10 +99,18 @@ TEST(DiagnoseApp, RefitNominalKeepsTheFindingAndReportsThePoles) {
   // --refit-nominal on a scenario whose nominal is right but for a dead zone:
   // the dead zone still leads, judged against the linear dynamics refitted
   // alone, and the report and the augmented model carry the refitted core.
+  // Under the sanitizers the first 6 000 of the log's 20 000 samples (the same
+  // code paths; the optimised build's diagnose on them: deadzone first, fit 94.5
+  // -> 99.0 %, as on the whole log).
   const std::string dir = kSuite + "stage_deadzone/";
   TempDir tmp;
   const std::string aug = tmp / "augmented.json";
-  CliResult r = run_cli({"diagnose", "--model", dir + "nominal.json", dir + "log.csv", "--inputs", "u", "--outputs", "y",
+  std::string log = dir + "log.csv";
+  if (sysid::test::kSanitized) {
+    log = tmp / "log.csv";
+    write_text_file(log, first_rows(dir + "log.csv", 6000));
+  }
+  CliResult r = run_cli({"diagnose", "--model", dir + "nominal.json", log, "--inputs", "u", "--outputs", "y",
                          "--refit-nominal", "--json", tmp / "report.json", "--out", aug});
   ASSERT_EQ(r.exit_code, 0) << describe(r);
   const json report = read_json(tmp / "report.json");
@@ -119,8 +128,7 @@ TEST(DiagnoseApp, RefitNominalKeepsTheFindingAndReportsThePoles) {
   EXPECT_NE(model["nominal"]["A"], nominal["A"]);  // the refitted core, in real modal form
   EXPECT_EQ(model["nominal"]["A"].size(), nominal["A"].size());
   // Without the flag the report has no nominal_refit and the core is the nominal's.
-  r = run_cli({"diagnose", "--model", dir + "nominal.json", dir + "log.csv", "--inputs", "u", "--outputs", "y", "--json",
-               tmp / "plain.json"});
+  r = run_cli({"diagnose", "--model", dir + "nominal.json", log, "--inputs", "u", "--outputs", "y", "--json", tmp / "plain.json"});
   ASSERT_EQ(r.exit_code, 0) << describe(r);
   EXPECT_FALSE(read_json(tmp / "plain.json").contains("nominal_refit"));
 }
