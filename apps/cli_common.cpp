@@ -36,6 +36,43 @@ void add_log_options(CLI::App& cmd, LogArgs& args, const LogOptionSpec& spec) {
                  "NaN/Inf/empty cells: error (default), drop (leading/trailing rows only), interpolate (linear)")
       ->check(CLI::IsMember({"error", "drop", "interpolate"}))
       ->capture_default_str();
+  add_csv_layout_options(cmd);
+}
+
+namespace {
+std::string g_time_unit;            // --time-unit ("" when not given)
+std::string g_delimiter, g_decimal;  // --delimiter, --decimal ("" when not given: detected)
+}  // namespace
+
+void add_csv_layout_options(CLI::App& cmd) {
+  cmd.add_option("--time-unit", g_time_unit,
+                 "what the time column counts: s, ms or us (default: the unit its name states, as in t_ms or "
+                 "'time [ms]', else s)")
+      ->check(CLI::IsMember({"s", "ms", "us"}));
+  cmd.add_option("--delimiter", g_delimiter,
+                 "field delimiter of the log: ',', ';', 'tab' or 'space' (default: detected from the header row)")
+      ->check(CLI::IsMember({",", ";", "tab", "space"}));
+  cmd.add_option("--decimal", g_decimal,
+                 "decimal mark of the log: '.' or ',' (default: '.' in comma-separated files, else detected)")
+      ->check(CLI::IsMember({".", ","}));
+}
+
+CsvFormat selected_csv_format() {
+  CsvFormat f;
+  if (g_delimiter == "tab") f.delimiter = '\t';
+  else if (g_delimiter == "space") f.delimiter = ' ';
+  else if (!g_delimiter.empty()) f.delimiter = g_delimiter[0];
+  if (!g_decimal.empty()) f.decimal = g_decimal[0];
+  if (f.decimal == ',' && f.delimiter == ',')
+    throw CLI::ValidationError("--decimal", "a decimal comma needs another delimiter (--delimiter ';', tab or space)");
+  return f;
+}
+
+std::optional<TimeUnit> selected_time_unit() {
+  if (g_time_unit == "s") return TimeUnit::seconds;
+  if (g_time_unit == "ms") return TimeUnit::milliseconds;
+  if (g_time_unit == "us") return TimeUnit::microseconds;
+  return std::nullopt;
 }
 
 std::vector<std::string> split_names(const std::string& list, const std::string& option_name) {
@@ -59,6 +96,7 @@ LogOptions make_log_options(const LogArgs& args, std::vector<std::string> inputs
   o.outputs = std::move(outputs);
   o.time_column = args.time_column == "none" ? std::string() : args.time_column;
   o.ts = args.ts;
+  o.time_unit = selected_time_unit();
   o.nan_policy = args.nan_policy == "drop"          ? NanPolicy::drop_rows
                  : args.nan_policy == "interpolate" ? NanPolicy::interpolate
                                                     : NanPolicy::error;
@@ -67,9 +105,10 @@ LogOptions make_log_options(const LogArgs& args, std::vector<std::string> inputs
 
 LoadedLog load_log(const std::string& path, const LogOptions& options) {
   LoadedLog out;
-  out.data = log_from_table(read_csv(path), options, &out.time);
+  out.data = log_from_table(read_csv(path, selected_csv_format()), options, &out.time);
   if (out.time.size() == 0) return out;
   out.time_name = options.time_column;
+  out.seconds_per_time_unit = seconds_per(time_unit_of(options, options.time_column));
   return out;
 }
 

@@ -36,13 +36,24 @@ struct LogOptionSpec {
   std::string outputs_help = "output columns of the log, comma-separated (e.g. y1,y2)";
 };
 
-/// Adds --inputs, --outputs, --ts, --time-column and --nan-policy to `cmd`.
+/// Adds --inputs, --outputs, --ts, --time-column and --nan-policy to `cmd`, and
+/// the file-layout options of add_csv_layout_options.
 void add_log_options(CLI::App& cmd, LogArgs& args, const LogOptionSpec& spec);
+
+/// Adds --time-unit s|ms|us, --delimiter and --decimal (how the log's file is
+/// written: DESIGN.md "CSV logs") to a verb that reads a log. Like --hold, a
+/// process-wide setting: one verb runs per process. load_log and make_log_options
+/// apply them.
+void add_csv_layout_options(CLI::App& cmd);
+/// The delimiter and decimal mark chosen (0: detected from the file).
+CsvFormat selected_csv_format();
+/// The time unit chosen by --time-unit (empty: from the column's name, else s).
+std::optional<TimeUnit> selected_time_unit();
 
 /// "a,b,c" -> {"a","b","c"} (trimmed); empty string -> {}. An empty item is a usage error.
 std::vector<std::string> split_names(const std::string& list, const std::string& option_name);
 
-/// LogOptions from the typed options, with explicit channel lists.
+/// LogOptions from the typed options (and --time-unit), with explicit channel lists.
 LogOptions make_log_options(const LogArgs& args, std::vector<std::string> inputs, std::vector<std::string> outputs);
 
 /// A log and its time column (empty when the log has none or it is not used),
@@ -51,9 +62,18 @@ struct LoadedLog {
   IoData data;
   Eigen::VectorXd time;
   std::string time_name;
+  double seconds_per_time_unit = 1.0;  ///< time * this = seconds (--time-unit, or the column's name)
+
+  /// The time of sample `row` of the first experiment in seconds: its stamp when
+  /// the log has a time column, else row * Ts.
+  double seconds_at(Eigen::Index row) const {
+    return time.size() == data.experiments.front().samples() ? time(row) * seconds_per_time_unit
+                                                             : static_cast<double>(row) * data.Ts;
+  }
 };
 
-/// read_csv + log_from_table, keeping the time stamps for writing them back.
+/// read_csv (with --delimiter/--decimal) + log_from_table, keeping the time
+/// stamps (in the column's unit) for writing them back.
 LoadedLog load_log(const std::string& path, const LogOptions& options);
 
 /// read_model_json; refuses "augmented" models (DataError) for the verbs that

@@ -8,6 +8,7 @@
 #include <sysid/config.hpp>
 #include <sysid/core/errors.hpp>
 
+#include <algorithm>
 #include <exception>
 #include <iostream>
 #include <stdexcept>
@@ -83,6 +84,23 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {  // a bug in an option definition
     std::cerr << "sysid: internal error: " << e.what() << "\n";
     return 3;
+  }
+
+  // The verb is the first argument that is not an option (the top level has
+  // only flags). An unknown one is a usage error even with --help, which CLI11
+  // would otherwise answer with the top-level help and exit 0.
+  for (int k = 1; k < argc; ++k) {
+    const std::string arg = argv[k];
+    if (arg.starts_with("-")) continue;
+    const bool known = std::any_of(verbs.begin(), verbs.end(), [&](const auto& verb) { return verb.command->check_name(arg); });
+    if (!known) {
+      std::string names;
+      for (const auto& verb : verbs) names += (names.empty() ? "" : ", ") + verb.command->get_name();
+      std::cerr << "sysid: usage error: unknown verb '" << arg << "'; the verbs are: " << names
+                << "\nRun 'sysid --help' for what each does.\n";
+      return 1;
+    }
+    break;
   }
 
   try {

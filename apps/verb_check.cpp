@@ -28,7 +28,7 @@ void run_check(const CheckArgs& a) {
   const LoadedLog log = load_log(a.log_path, lo);
   DataCheckOptions o;
   o.max_excitation_order = a.max_order;
-  const DataCheckResult r = check_data(log.data, log.time, o);
+  const DataCheckResult r = check_data(log.data, log.time * log.seconds_per_time_unit, o);
   std::cout << "pre-flight check of " << a.log_path << " (Ts " << fmt(log.data.Ts) << " s)\n" << r.report();
 }
 

@@ -42,8 +42,7 @@ void plot_compare(const CompareArgs& a, const LoadedLog& log, const CompareResul
   const Eigen::Index n = e.samples(), stride = plot_stride(n);
   const Eigen::Index np = (n + stride - 1) / stride;
   Eigen::VectorXd t(np);
-  for (Eigen::Index k = 0; k < np; ++k)
-    t(k) = log.time.size() == n ? log.time(k * stride) : static_cast<double>(k * stride) * log.data.Ts;
+  for (Eigen::Index k = 0; k < np; ++k) t(k) = log.seconds_at(k * stride);
   PlotFigure fig;
   fig.title = (a.fem_path.empty() ? a.model_path : a.fem_path) + " on " + a.log_path + " (" + how +
               (stride > 1 && r != nullptr ? ", every " + std::to_string(stride) + "th sample drawn" : "") + ")";

@@ -125,8 +125,7 @@ void plot_diagnose(const DiagnoseArgs& a, const LoadedLog& log, const DiagnoseRe
     }
     for (Eigen::Index k = 0; k < np; ++k) {
       const Eigen::Index row = start + k * stride;
-      measured.x(k) = nominal.x(k) = augmented.x(k) =
-          log.time.size() == N ? log.time(row) : static_cast<double>(row) * log.data.Ts;
+      measured.x(k) = nominal.x(k) = augmented.x(k) = log.seconds_at(row);
       measured.y(k) = e.y(row, i);
       nominal.y(k) = r.simulated_before(row, i);
       augmented.y(k) = r.simulated_after(row, i);

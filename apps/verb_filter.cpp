@@ -40,7 +40,7 @@ void run_filter(const FilterArgs& a) {
   if (a.zero_phase && !band) throw CLI::ValidationError("--zero-phase", "needs --lowpass, --highpass or --bandpass");
   claim_outputs({a.out}, {a.log_path});
 
-  const CsvTable table = read_csv(a.log_path);
+  const CsvTable table = read_csv(a.log_path, selected_csv_format());
   const std::string time_name = a.time_column == "none" ? std::string() : a.time_column;
   const Eigen::Index time_col = time_name.empty() ? -1 : table.column(time_name);
   std::vector<std::string> columns = split_names(a.columns, "--columns");
@@ -54,6 +54,7 @@ void run_filter(const FilterArgs& a) {
   lo.outputs = columns;
   lo.time_column = time_name;
   lo.ts = a.ts;
+  lo.time_unit = selected_time_unit();
   const IoData data = log_from_table(table, lo);
   const double fs = 1.0 / data.Ts;
   Eigen::MatrixXd x = data.experiments.front().y;
@@ -114,6 +115,7 @@ Verb register_filter(CLI::App& app) {
   cmd->add_option("--ts", args->ts, "sample time in seconds; required when the log has no time column")->check(CLI::PositiveNumber);
   cmd->add_option("--time-column", args->time_column, "name of the time column, kept as it is ('none': no time column)")
       ->capture_default_str();
+  add_csv_layout_options(*cmd);
   CLI::Option* lp = cmd->add_option("--lowpass", args->lowpass, "low-pass cutoff in Hz (-3 dB of the designed filter)")
                         ->check(CLI::PositiveNumber);
   CLI::Option* hp = cmd->add_option("--highpass", args->highpass, "high-pass cutoff in Hz")->check(CLI::PositiveNumber);

@@ -226,6 +226,7 @@ Verb register_psd(CLI::App& app) {
   cmd->add_option("--nan-policy", args->nan_policy, "NaN/Inf/empty cells: error, drop (leading/trailing rows), interpolate")
       ->check(CLI::IsMember({"error", "drop", "interpolate"}))
       ->capture_default_str();
+  add_csv_layout_options(*cmd);
   add_welch_options(*cmd, args->welch);
   cmd->add_option("--scaling", args->scaling, "density (units^2/Hz) or spectrum (units^2: reads sine powers, best with flattop)")
       ->capture_default_str()

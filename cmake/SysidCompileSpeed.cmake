@@ -34,3 +34,13 @@ function(sysid_compile_fast target)
   endif()
   target_precompile_headers(${target} PRIVATE ${SYSID_EIGEN_INSTANCES_HEADER} ${arg_PCH})
 endfunction()
+
+# sysid_compile_light(<target>)
+#   Compiles <target> at -O1 in optimised builds (Release, RelWithDebInfo; later on
+#   the command line than CMAKE_CXX_FLAGS_<CONFIG>, so it wins). For the code that
+#   calls the library rather than being it: the tests and the data generators,
+#   whose run time is spent inside libsysid (and the program), which keep the
+#   configuration's optimisation. Sanitized and debug builds keep their own level.
+function(sysid_compile_light target)
+  target_compile_options(${target} PRIVATE $<$<CONFIG:Release,RelWithDebInfo>:-O1>)
+endfunction()

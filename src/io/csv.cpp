@@ -3,6 +3,7 @@
 #include <fast_float/fast_float.h>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -20,7 +21,8 @@
 namespace sysid {
 namespace {
 
-enum class Delimiter { comma, tab, whitespace };
+/// The delimiter of runs of spaces and tabs (whitespace-aligned files).
+constexpr char kWhitespace = ' ';
 
 inline bool is_blank(char c) { return c == ' ' || c == '\t'; }
 
@@ -35,24 +37,45 @@ std::string excerpt(const char* b, const char* e) {
   return std::string(b, e);
 }
 
+/// fast_float with the file's decimal mark ('.' or ',').
+inline fast_float::from_chars_result from_chars(const char* b, const char* e, double& v, char decimal) {
+  return fast_float::from_chars_advanced(b, e, v, fast_float::parse_options(fast_float::chars_format::general, decimal));
+}
+
 /// Parses one number occupying exactly [b, e) (already trimmed). Returns false
 /// when the text is not a number. A leading '+' is accepted (std::from_chars and
 /// fast_float reject it, but loggers write it).
-inline bool parse_number(const char* b, const char* e, double& v) {
+inline bool parse_number(const char* b, const char* e, double& v, char decimal) {
   if (b < e && *b == '+') {
     ++b;
     if (b < e && (*b == '-' || *b == '+')) return false;
   }
   if (b == e) return false;
-  const auto r = fast_float::from_chars(b, e, v);
+  const auto r = from_chars(b, e, v, decimal);
   return r.ec == std::errc() && r.ptr == e;
+}
+
+/// The field delimiter a header row implies (CsvFormat::delimiter's rule).
+char detect_delimiter(const char* b, const char* e) {
+  const auto commas = std::count(b, e, ','), semicolons = std::count(b, e, ';');
+  if (semicolons > commas) return ';';
+  if (commas > 0) return ',';
+  if (std::memchr(b, '\t', static_cast<std::size_t>(e - b))) return '\t';
+  return kWhitespace;
 }
 
 class CsvParser {
  public:
   /// `file`, when given, holds [begin, end): the parser releases the text behind it as it goes.
-  CsvParser(const char* begin, const char* end, const std::string& source, MappedFile* file = nullptr)
-      : m_p(begin), m_end(end), m_source(source), m_file(file) {
+  CsvParser(const char* begin, const char* end, const std::string& source, const CsvFormat& format,
+            MappedFile* file = nullptr)
+      : m_p(begin), m_end(end), m_source(source), m_file(file), m_delimiter(format.delimiter), m_decimal(format.decimal) {
+    if (m_delimiter != 0 && m_delimiter != ',' && m_delimiter != ';' && m_delimiter != '\t' && m_delimiter != kWhitespace)
+      throw std::invalid_argument("read_csv: the delimiter must be ',', ';', TAB or ' ' (whitespace)");
+    if (m_decimal != 0 && m_decimal != '.' && m_decimal != ',')
+      throw std::invalid_argument("read_csv: the decimal mark must be '.' or ','");
+    if (m_decimal == ',' && m_delimiter == ',')
+      throw std::invalid_argument("read_csv: a decimal comma needs another delimiter (';', TAB or whitespace)");
     if (std::string_view(m_p, static_cast<std::size_t>(m_end - m_p)).starts_with(k_utf8_bom)) m_p += k_utf8_bom.size();
   }
 
@@ -63,6 +86,10 @@ class CsvParser {
     const char* e;
     if (!next_content_line(b, e)) throw DataError(m_source, 0, 0, "empty file: no header row");
     table.header_line = m_line;
+    if (m_delimiter == 0) m_delimiter = detect_delimiter(b, e);
+    if (m_decimal == 0) m_decimal = detect_decimal();
+    if (m_decimal == ',' && m_delimiter == ',')
+      throw DataError(m_source, m_line, 0, "the header row is comma-separated, so ',' cannot be the decimal mark");
     parse_header(b, e, table.names);
     m_columns = table.names.size();
 
@@ -98,10 +125,10 @@ class CsvParser {
         table.values.conservativeResize(m_capacity, Eigen::NoChange);
       }
       double* row = table.values.data() + rows;  // element (rows, 0); columns are m_capacity apart
-      if (m_delimiter == Delimiter::whitespace)
+      if (m_delimiter == kWhitespace)
         parse_row_whitespace(b, e, row);
       else
-        parse_row_delimited(b, e, row, m_delimiter == Delimiter::comma ? ',' : '\t');
+        parse_row_delimited(b, e, row, m_delimiter);
       table.line_numbers.push_back(m_line);
       ++rows;
     }
@@ -130,20 +157,49 @@ class CsvParser {
     return false;
   }
 
+  /// The decimal mark when not given (CsvFormat::decimal's rule): '.' in
+  /// comma-separated files; otherwise ',' if the first data line that holds a '.'
+  /// or a ',' (of the first kDecimalScanLines) holds a ','. Reads ahead without
+  /// consuming.
+  char detect_decimal() const {
+    if (m_delimiter == ',') return '.';
+    constexpr int kDecimalScanLines = 1000;
+    const char* p = m_p;
+    for (int lines = 0; p < m_end && lines < kDecimalScanLines; ++lines) {
+      const char* nl = static_cast<const char*>(std::memchr(p, '\n', static_cast<std::size_t>(m_end - p)));
+      const char* e = nl ? nl : m_end;
+      const char* q = p;
+      while (q < e && is_blank(*q)) ++q;
+      if (q < e && *q != '#') {
+        for (; q < e; ++q) {
+          if (*q == ',') return ',';
+          if (*q == '.') return '.';
+        }
+      }
+      p = nl ? nl + 1 : m_end;
+    }
+    return '.';
+  }
+
   [[noreturn]] void fail(std::size_t field, const std::string& message) const {
     throw DataError(m_source, m_line, static_cast<long>(field + 1), message);
   }
 
-  void parse_header(const char* b, const char* e, std::vector<std::string>& names) {
-    if (std::memchr(b, ',', static_cast<std::size_t>(e - b)))
-      m_delimiter = Delimiter::comma;
-    else if (std::memchr(b, '\t', static_cast<std::size_t>(e - b)))
-      m_delimiter = Delimiter::tab;
-    else
-      m_delimiter = Delimiter::whitespace;
+  /// "expected a number, found '...'", with the likely cause when the field looks
+  /// like another layout (a decimal comma, another delimiter).
+  [[noreturn]] void fail_number(std::size_t field, const char* b, const char* e) const {
+    std::string message = "expected a number, found '" + excerpt(b, e) + "'";
+    const std::string_view text(b, static_cast<std::size_t>(e - b));
+    if (m_delimiter != ';' && text.find(';') != std::string_view::npos)
+      message += " (a ';'-separated file? give the delimiter ';', with --delimiter ';' on the command line)";
+    else if (m_decimal == '.' && text.find(',') != std::string_view::npos)
+      message += " (a decimal comma? give the decimal mark ',', with --decimal ',' on the command line)";
+    fail(field, message);
+  }
 
+  void parse_header(const char* b, const char* e, std::vector<std::string>& names) {
     std::vector<std::pair<const char*, const char*>> fields;
-    if (m_delimiter == Delimiter::whitespace) {
+    if (m_delimiter == kWhitespace) {
       const char* q = b;
       for (;;) {
         while (q < e && is_blank(*q)) ++q;
@@ -153,7 +209,7 @@ class CsvParser {
         fields.emplace_back(f, q);
       }
     } else {
-      const char delim = m_delimiter == Delimiter::comma ? ',' : '\t';
+      const char delim = m_delimiter;
       const char* q = b;
       for (;;) {
         const char* f = q;
@@ -173,7 +229,7 @@ class CsvParser {
     for (std::size_t k = 0; k < fields.size(); ++k) {
       auto [fb, fe] = fields[k];
       double dummy;
-      all_numbers = all_numbers && parse_number(fb, fe, dummy);
+      all_numbers = all_numbers && parse_number(fb, fe, dummy, m_decimal);
       if (fe - fb >= 2 && *fb == '"' && fe[-1] == '"') {
         ++fb;
         --fe;
@@ -206,7 +262,7 @@ class CsvParser {
         v = std::numeric_limits<double>::quiet_NaN();  // empty cell
       } else {
         const char* f = q;
-        auto r = fast_float::from_chars(q, e, v);
+        auto r = from_chars(q, e, v, m_decimal);
         if (r.ec == std::errc() && (r.ptr == e || *r.ptr == delim)) {
           q = r.ptr;
         } else {
@@ -215,9 +271,9 @@ class CsvParser {
           while (q < e && *q != delim) ++q;
           const char* fe = q;
           while (fe > f && is_blank(fe[-1])) --fe;
-          if (!parse_number(f, fe, v)) {
+          if (!parse_number(f, fe, v, m_decimal)) {
             if (col >= m_columns) fail_count(count_fields_from(col, q, e, delim));
-            fail(col, "expected a number, found '" + excerpt(f, fe) + "'");
+            fail_number(col, f, fe);
           }
         }
       }
@@ -241,14 +297,14 @@ class CsvParser {
       if (q == e) break;
       const char* f = q;
       double v;
-      auto r = fast_float::from_chars(q, e, v);
+      auto r = from_chars(q, e, v, m_decimal);
       if (r.ec == std::errc() && (r.ptr == e || is_blank(*r.ptr))) {
         q = r.ptr;
       } else {
         while (q < e && !is_blank(*q)) ++q;
-        if (!parse_number(f, q, v)) {
+        if (!parse_number(f, q, v, m_decimal)) {
           if (col >= m_columns) fail_count(count_whitespace_fields_from(col, q, e));
-          fail(col, "expected a number, found '" + excerpt(f, q) + "'");
+          fail_number(col, f, q);
         }
       }
       if (col >= m_columns) fail_count(count_whitespace_fields_from(col, q, e));
@@ -274,12 +330,64 @@ class CsvParser {
   /// Text released in steps of this many bytes (a step costs one madvise).
   static constexpr std::ptrdiff_t kReleaseBytes = 8 << 20;
   long m_line = 0;
-  Delimiter m_delimiter = Delimiter::comma;
+  char m_delimiter;  ///< ',', ';', '\t' or kWhitespace (0 until detected)
+  char m_decimal;    ///< '.' or ',' (0 until detected)
   std::size_t m_columns = 0;
   Eigen::Index m_capacity = 0;  ///< allocated rows of the result (column stride)
 };
 
 std::string format_seconds(double x) { return format_number(x, 6); }
+
+std::string unit_symbol(TimeUnit unit) {
+  switch (unit) {
+    case TimeUnit::milliseconds: return "ms";
+    case TimeUnit::microseconds: return "us";
+    case TimeUnit::seconds: break;
+  }
+  return "s";
+}
+
+/// The shortest decimal that reads back to `x` (std::to_chars), as the exponent
+/// of its leading digit and the unit of its last digit.
+struct ShortestDecimal {
+  int exponent = 0;      ///< x = d.ddd * 10^exponent
+  double quantum = 0.0;  ///< the unit of the last digit
+};
+
+ShortestDecimal shortest_decimal(double x) {
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, x, std::chars_format::scientific);
+  const std::string_view text(buf, static_cast<std::size_t>(r.ptr - buf));  // "-d.ddde-05"
+  const std::size_t e = text.find('e'), dot = text.find('.');
+  ShortestDecimal d;
+  std::from_chars(text.data() + e + 1 + (text[e + 1] == '+' ? 1 : 0), text.data() + text.size(), d.exponent);
+  const int decimals = dot == std::string_view::npos ? 0 : static_cast<int>(e - dot - 1);
+  d.quantum = std::pow(10.0, d.exponent - decimals);
+  return d;
+}
+
+/// The rounding quantum of each of the n time stamps `t` as the file printed them.
+/// Instruments print time with a fixed number of decimals (quantum q_abs) or of
+/// significant digits (a quantum q_rel * 10^exponent growing with the stamp's
+/// decade); the model here is their larger, q(t) = max(q_abs, q_rel * 10^e(t)).
+/// One stamp's shortest decimal drops trailing zeros (0.500000 reads as 0.5) and
+/// so overstates its quantum; the finest of the record does not: q_abs and q_rel
+/// are the minima over the stamps.
+std::vector<double> printed_quanta(const double* t, Eigen::Index n) {
+  std::vector<ShortestDecimal> d(static_cast<std::size_t>(n));
+  double q_abs = std::numeric_limits<double>::infinity(), q_rel = q_abs;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    if (t[k] == 0.0) continue;  // "0" carries no digits to go by
+    d[static_cast<std::size_t>(k)] = shortest_decimal(t[k]);
+    q_abs = std::min(q_abs, d[static_cast<std::size_t>(k)].quantum);
+    q_rel = std::min(q_rel, d[static_cast<std::size_t>(k)].quantum / std::pow(10.0, d[static_cast<std::size_t>(k)].exponent));
+  }
+  std::vector<double> q(static_cast<std::size_t>(n));
+  for (Eigen::Index k = 0; k < n; ++k)
+    q[static_cast<std::size_t>(k)] =
+        t[k] == 0.0 ? q_abs : std::max(q_abs, q_rel * std::pow(10.0, d[static_cast<std::size_t>(k)].exponent));
+  return q;
+}
 
 std::string join(const std::vector<std::string>& names) {
   std::string s;
@@ -294,14 +402,42 @@ Eigen::Index CsvTable::column(const std::string& name) const {
   return it == names.end() ? -1 : static_cast<Eigen::Index>(it - names.begin());
 }
 
-CsvTable read_csv_string(const std::string& text, const std::string& source_name) {
-  return CsvParser(text.data(), text.data() + text.size(), source_name).parse();
+double seconds_per(TimeUnit unit) {
+  switch (unit) {
+    case TimeUnit::milliseconds: return 1e-3;
+    case TimeUnit::microseconds: return 1e-6;
+    case TimeUnit::seconds: break;
+  }
+  return 1.0;
 }
 
-CsvTable read_csv(const std::string& path) {
+std::optional<TimeUnit> time_unit_in_name(const std::string& name) {
+  std::string n;
+  for (char c : name) n += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  while (!n.empty() && (n.back() == ' ' || n.back() == ']' || n.back() == ')')) n.pop_back();
+  // The last word: after '_', ' ', '.', '[' or '('.
+  const std::size_t cut = n.find_last_of("_ .[(");
+  if (cut == std::string::npos) return std::nullopt;
+  const std::string word = n.substr(cut + 1);
+  if (word == "s" || word == "sec") return TimeUnit::seconds;
+  if (word == "ms" || word == "msec") return TimeUnit::milliseconds;
+  if (word == "us" || word == "usec" || word == "\xC2\xB5s" || word == "\xCE\xBCs") return TimeUnit::microseconds;  // µs: micro sign or Greek mu
+  return std::nullopt;
+}
+
+TimeUnit time_unit_of(const LogOptions& options, const std::string& column_name) {
+  if (options.time_unit) return *options.time_unit;
+  return time_unit_in_name(column_name).value_or(TimeUnit::seconds);
+}
+
+CsvTable read_csv_string(const std::string& text, const std::string& source_name, const CsvFormat& format) {
+  return CsvParser(text.data(), text.data() + text.size(), source_name, format).parse();
+}
+
+CsvTable read_csv(const std::string& path, const CsvFormat& format) {
   MappedFile file(path);
   const std::string_view text = file.text();
-  return CsvParser(text.data(), text.data() + text.size(), path, &file).parse();
+  return CsvParser(text.data(), text.data() + text.size(), path, format, &file).parse();
 }
 
 namespace {
@@ -447,6 +583,9 @@ IoData make_log(const CsvTable& table, Eigen::MatrixXd* owned_values, const LogO
 
   double ts = 0.0;
   if (time_col >= 0) {
+    const TimeUnit unit = time_unit_of(options, options.time_column);
+    const std::string symbol = unit_symbol(unit);
+    const auto in_unit = [&](double x) { return format_seconds(x) + " " + symbol; };
     const double* tk = sel[time_sel].first + first;
     if (n < 2)
       throw DataError(src, line_of(0), static_cast<long>(time_col + 1),
@@ -456,33 +595,64 @@ IoData make_log(const CsvTable& table, Eigen::MatrixXd* owned_values, const LogO
       steps[static_cast<std::size_t>(r - 1)] = tk[r] - tk[r - 1];
       if (!(tk[r] > tk[r - 1]))
         throw DataError(src, line_of(r), static_cast<long>(time_col + 1),
-                        "time stamps not increasing: " + format_seconds(tk[r]) + " s after " + format_seconds(tk[r - 1]) +
-                            " s");
+                        "time stamps not increasing: " + in_unit(tk[r]) + " after " + in_unit(tk[r - 1]) +
+                            (tk[r] == tk[r - 1] ? " (a repeated sample; or stamps printed with too few digits for "
+                                                  "the sample rate: then give the sample time with --ts and "
+                                                  "--time-column none)"
+                                                : ""));
       // Both finite, yet the difference can overflow (-1e308 then 1e308): an
       // infinite step would pass the uniformity test below (Inf - Inf is NaN).
       if (!std::isfinite(steps[static_cast<std::size_t>(r - 1)]))
         throw DataError(src, line_of(r), static_cast<long>(time_col + 1),
-                        "time step from " + format_seconds(tk[r - 1]) + " s to " + format_seconds(tk[r]) +
-                            " s is too large for a double");
+                        "time step from " + in_unit(tk[r - 1]) + " to " + in_unit(tk[r]) + " is too large for a double");
     }
     const double median_step = median(steps);
+    // The printed digits' rounding, computed only if a step needs it.
+    std::vector<double> quantum;
+    double coarsest = 0.0;
+    const auto rounding = [&]() {
+      if (quantum.empty()) {
+        quantum = printed_quanta(tk, n);
+        coarsest = *std::max_element(quantum.begin(), quantum.end());
+      }
+    };
     for (Eigen::Index r = 1; r < n; ++r) {
       const double step = steps[static_cast<std::size_t>(r - 1)];
-      if (std::abs(step - median_step) > options.time_tolerance * median_step)
+      const double deviation = std::abs(step - median_step), tight = options.time_tolerance * median_step;
+      if (deviation <= tight) continue;
+      // Each stamp is off by up to half its quantum; the median step, a
+      // difference of two stamps somewhere in the record, by up to the coarsest.
+      rounding();
+      const double explained =
+          0.5 * (quantum[static_cast<std::size_t>(r - 1)] + quantum[static_cast<std::size_t>(r)]) + coarsest;
+      // A step off by half a sample or more is never taken for rounding.
+      if (deviation > tight + explained || deviation >= 0.5 * median_step)
         throw DataError(src, line_of(r), static_cast<long>(time_col + 1),
-                        "non-uniform time stamps: step " + format_seconds(step) + " s at line " +
-                            std::to_string(line_of(r)) + ", expected " + format_seconds(median_step) + " s");
+                        "non-uniform time stamps: step " + in_unit(step) + " at line " + std::to_string(line_of(r)) +
+                            ", expected " + in_unit(median_step) + " (a lost or repeated sample, or a gap)");
+      // Rounding that could reach half a step could also hide a lost sample.
+      if (explained >= 0.5 * median_step)
+        throw DataError(src, line_of(r), static_cast<long>(time_col + 1),
+                        "time stamps printed too coarsely to check the sampling: step " + in_unit(step) +
+                            " against " + in_unit(median_step) + ", while the printed digits are only good to " +
+                            in_unit(explained) + "; give the sample time with --ts and --time-column none");
     }
     // Every step is finite, yet their sum can overflow (steps of 1e308 from
     // -1e308 to 1e308): then divide before subtracting (exact enough there, and
     // finite since |tk| / (n - 1) <= DBL_MAX / 2 for n >= 3; n = 2 is one step).
     const double span = tk[n - 1] - tk[0];
     const auto intervals = static_cast<double>(n - 1);
-    ts = std::isfinite(span) ? span / intervals : tk[n - 1] / intervals - tk[0] / intervals;
-    if (options.ts && std::abs(*options.ts - ts) > options.time_tolerance * *options.ts)
-      throw DataError(src, 0, 0,
-                      "time column '" + options.time_column + "' gives a sample time of " + format_seconds(ts) +
-                          " s but " + format_seconds(*options.ts) + " s was given");
+    ts = (std::isfinite(span) ? span / intervals : tk[n - 1] / intervals - tk[0] / intervals) * seconds_per(unit);
+    if (options.ts && std::abs(*options.ts - ts) > options.time_tolerance * *options.ts) {
+      // The end stamps' rounding, spread over the record.
+      rounding();
+      const double explained = coarsest / intervals * seconds_per(unit);
+      if (std::abs(*options.ts - ts) > options.time_tolerance * *options.ts + explained)
+        throw DataError(src, 0, 0,
+                        "time column '" + options.time_column + "' gives a sample time of " + format_seconds(ts) +
+                            " s but " + format_seconds(*options.ts) + " s was given" +
+                            (unit == TimeUnit::seconds ? " (a time column in ms or us? give --time-unit)" : ""));
+    }
   } else if (options.ts) {
     ts = *options.ts;
   } else {
@@ -543,16 +713,17 @@ std::string format_csv(const std::vector<std::string>& names, const Eigen::Matri
   for (const auto& n : names) {
     if (n.empty()) throw std::invalid_argument("format_csv: empty column name");
     // A leading byte-order mark would be skipped by the reader (it marks the encoding).
-    if (n.find_first_of(",\"\r\n") != std::string::npos || n.front() == '#' || is_blank(n.front()) || is_blank(n.back()) ||
-        n.starts_with(k_utf8_bom))
+    // No ';' either: a header with more ';' than ',' reads as ';'-separated.
+    if (n.find_first_of(",;\"\r\n") != std::string::npos || n.front() == '#' || is_blank(n.front()) ||
+        is_blank(n.back()) || n.starts_with(k_utf8_bom))
       throw std::invalid_argument("format_csv: column name '" + n +
-                                  "' cannot be written (no ',', '\"', line breaks, leading '#' or byte-order mark, or "
-                                  "surrounding spaces)");
+                                  "' cannot be written (no ',', ';', '\"', line breaks, leading '#' or byte-order mark, "
+                                  "or surrounding spaces)");
     if (names.size() == 1 && n.find_first_of(" \t") != std::string::npos)
       throw std::invalid_argument("format_csv: a single column name cannot contain spaces ('" + n + "')");
     if (!seen.insert(n).second) throw std::invalid_argument("format_csv: duplicate column name '" + n + "'");
     double dummy;
-    all_numbers = all_numbers && parse_number(n.data(), n.data() + n.size(), dummy);
+    all_numbers = all_numbers && parse_number(n.data(), n.data() + n.size(), dummy, '.');
   }
   if (all_numbers) throw std::invalid_argument("format_csv: column names must not all be numbers");
 

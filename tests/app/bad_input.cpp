@@ -183,6 +183,13 @@ TEST_F(BadInput, UsageErrorsExitOne) {
   EXPECT_NE(r.err.find("--inputs"), std::string::npos) << r.err;
   r = run_cli({"frobnicate"});
   EXPECT_EQ(r.exit_code, 1) << describe(r);
+  EXPECT_NE(r.err.find("unknown verb 'frobnicate'"), std::string::npos) << r.err;
+  // With --help too: a script must be able to tell that the verb does not exist.
+  r = run_cli({"frobnicate", "--help"});
+  EXPECT_EQ(r.exit_code, 1) << describe(r);
+  EXPECT_NE(r.err.find("unknown verb 'frobnicate'; the verbs are: n4sid,"), std::string::npos) << r.err;
+  r = run_cli({"n4sid", "--help"});
+  EXPECT_EQ(r.exit_code, 0) << describe(r);
   EXPECT_EQ(listing(dir.path()), before);
 }
 

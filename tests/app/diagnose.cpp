@@ -25,14 +25,6 @@ namespace {
 
 const std::string kSuite = std::string(SYSID_TEST_DATA_DIR) + "/concealed/";
 
-/// The header and the first `rows` data rows of a CSV file.
-std::string first_rows(const std::string& path, int rows) {
-  std::ifstream f(path);
-  std::string line, text;
-  for (int k = 0; k <= rows && std::getline(f, line); ++k) text += line + "\n";
-  return text;
-}
-
 }  // namespace
 
 TEST(DiagnoseApp, NullScenarioHasNoFindingsAndWritesTheNominal) {

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "run_cli.hpp"
+#include "sanitizers.hpp"
 
 namespace test_app_fem {
 
@@ -30,6 +31,18 @@ double printed_error(const std::string& out, const std::string& output) {
   std::smatch m;
   if (!std::regex_search(out, m, line)) return std::nan("");
   return std::stod(m[1]);
+}
+
+/// The log diagnose reads: the whole of `name` (24 000 samples), or under the
+/// sanitizers its first kSanitizedRows, written into `tmp` (the same code paths;
+/// the optimised build's diagnose of the ZOH log on them: mode_shift to 144.888 Hz,
+/// fit 90.6 -> 95.7 %, against 144.888 Hz, 91.0 -> 96.4 % on the whole log).
+constexpr int kSanitizedRows = 8000;
+std::string diagnose_log(const std::string& name, const TempDir& tmp) {
+  if (!kSanitized) return kFem + name;
+  const std::string part = tmp / ("part_" + name);
+  write_text_file(part, first_rows(kFem + name, kSanitizedRows));
+  return part;
 }
 
 }  // namespace
@@ -108,7 +121,7 @@ TEST(FemApp, DiagnoseOnTheReducedFeModelNamesTheShiftedMode) {
   CliResult r = run_cli({"reduce", "--fem", kFem + "beam.json", "--modes", "8", "--ts", "0.0005", "--out", reduced});
   ASSERT_EQ(r.exit_code, 0) << describe(r);
   const json truth = read_json(kFem + "truth.json");
-  r = run_cli({"diagnose", "--model", reduced, kFem + "measured_zoh.csv", "--inputs", "F", "--outputs", "v_tip,v_mid",
+  r = run_cli({"diagnose", "--model", reduced, diagnose_log("measured_zoh.csv", tmp), "--inputs", "F", "--outputs", "v_tip,v_mid",
                "--json", tmp / "report.json", "--out", tmp / "augmented.json", "--max-findings", "1"});
   ASSERT_EQ(r.exit_code, 0) << describe(r);
   const json report = read_json(tmp / "report.json");
@@ -146,7 +159,7 @@ TEST(FemApp, FirstOrderHoldNominalDiagnosesTheSmoothlySampledLog) {
   EXPECT_GT(fit_of(foh, "v_mid"), fit_of(zoh, "v_mid") + 5.0);
 
   const json truth = read_json(kFem + "truth.json");
-  r = run_cli({"diagnose", "--model", foh, kFem + "measured.csv", "--inputs", "F", "--outputs", "v_tip,v_mid", "--json",
+  r = run_cli({"diagnose", "--model", foh, diagnose_log("measured.csv", tmp), "--inputs", "F", "--outputs", "v_tip,v_mid", "--json",
                tmp / "report.json", "--max-findings", "1"});
   ASSERT_EQ(r.exit_code, 0) << describe(r);
   const json report = read_json(tmp / "report.json");

@@ -15,6 +15,9 @@
 //  - a log that reads has Ts > 0 and finite, finite samples, and the channels asked for;
 //  - the consuming log_from_table (CsvTable&&) gives the same log bit for bit, one
 //    time stamp per sample when a time column is used, or the same error.
+#include <algorithm>
+#include <charconv>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -91,6 +94,18 @@ sysid::LogOptions make_options(std::uint8_t how, std::uint8_t roles, const sysid
   return o;
 }
 
+/// The unit of the last digit of the shortest decimal that reads back to `x`
+/// (0 for 0, and for values that are not finite).
+double shortest_decimal_unit(double x) {
+  if (x == 0.0 || !std::isfinite(x)) return 0.0;
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, x, std::chars_format::scientific);
+  const std::string text(buf, r.ptr);
+  const std::size_t e = text.find('e'), dot = text.find('.');
+  const int decimals = dot == std::string::npos ? 0 : static_cast<int>(e - dot - 1);
+  return std::pow(10.0, std::stoi(text.substr(e + 1)) - decimals);
+}
+
 void check_log(const sysid::IoData& data, const sysid::LogOptions& o, const sysid::CsvTable& table) {
   check(data.Ts > 0.0 && std::isfinite(data.Ts), "log: Ts > 0 and finite");
   check(data.experiments.size() == 1, "log: one experiment");
@@ -103,7 +118,20 @@ void check_log(const sysid::IoData& data, const sysid::LogOptions& o, const sysi
   const bool time_column_used = !o.time_column.empty() && table.column(o.time_column) >= 0;
   check(time_column_used || o.ts, "log: without a time column, --ts is required");
   if (!time_column_used) check(data.Ts == *o.ts, "log: Ts is --ts when no time column is used");
-  else if (o.ts) check(std::abs(data.Ts - *o.ts) <= o.time_tolerance * *o.ts, "log: time column and --ts agree");
+  else if (o.ts) {
+    // Within time_tolerance, plus the end stamps' rounding spread over the record
+    // (csv.hpp: a stamp is known to half a unit of its last printed digit). An
+    // independent upper bound on that rounding: the coarsest last digit of any
+    // stamp's shortest decimal in the whole column.
+    const Eigen::Index t_col = table.column(o.time_column);
+    double coarsest = 0.0;
+    for (Eigen::Index r = 0; r < table.values.rows(); ++r)
+      coarsest = std::max(coarsest, shortest_decimal_unit(table.values(r, t_col)));
+    const double rounding = coarsest * sysid::seconds_per(sysid::time_unit_of(o, o.time_column)) /
+                            static_cast<double>(std::max<Eigen::Index>(1, e.y.rows() - 1));
+    check(std::abs(data.Ts - *o.ts) <= o.time_tolerance * *o.ts + rounding * (1.0 + 1e-9),
+          "log: time column and --ts agree within the tolerance and the stamps' rounding");
+  }
 }
 
 }  // namespace

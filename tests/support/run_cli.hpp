@@ -100,6 +100,14 @@ inline void write_text_file(const std::string& path, const std::string& text) {
   if (!f) throw std::runtime_error("cannot write " + path);
 }
 
+/// The header and the first `rows` data rows of a CSV file.
+inline std::string first_rows(const std::string& path, int rows) {
+  std::ifstream f(path);
+  std::string line, text;
+  for (int k = 0; k <= rows && std::getline(f, line); ++k) text += line + "\n";
+  return text;
+}
+
 /// Runs `sysid args...` through /bin/sh: stdout is read through popen, stderr is
 /// redirected to a temporary file (unique per call, removed afterwards).
 inline CliResult run_cli(const std::vector<std::string>& args) {
