@@ -68,12 +68,7 @@ CsvFormat selected_csv_format() {
   return f;
 }
 
-std::optional<TimeUnit> selected_time_unit() {
-  if (g_time_unit == "s") return TimeUnit::seconds;
-  if (g_time_unit == "ms") return TimeUnit::milliseconds;
-  if (g_time_unit == "us") return TimeUnit::microseconds;
-  return std::nullopt;
-}
+std::optional<TimeUnit> selected_time_unit() { return time_unit_from_symbol(g_time_unit); }
 
 std::vector<std::string> split_names(const std::string& list, const std::string& option_name) {
   std::vector<std::string> names;

@@ -411,18 +411,22 @@ double seconds_per(TimeUnit unit) {
   return 1.0;
 }
 
-std::optional<TimeUnit> time_unit_in_name(const std::string& name) {
-  std::string n;
-  for (char c : name) n += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  while (!n.empty() && (n.back() == ' ' || n.back() == ']' || n.back() == ')')) n.pop_back();
-  // The last word: after '_', ' ', '.', '[' or '('.
-  const std::size_t cut = n.find_last_of("_ .[(");
-  if (cut == std::string::npos) return std::nullopt;
-  const std::string word = n.substr(cut + 1);
+std::optional<TimeUnit> time_unit_from_symbol(std::string_view symbol) {
+  std::string word;
+  for (char c : symbol) word += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (word == "s" || word == "sec") return TimeUnit::seconds;
   if (word == "ms" || word == "msec") return TimeUnit::milliseconds;
   if (word == "us" || word == "usec" || word == "\xC2\xB5s" || word == "\xCE\xBCs") return TimeUnit::microseconds;  // µs: micro sign or Greek mu
   return std::nullopt;
+}
+
+std::optional<TimeUnit> time_unit_in_name(const std::string& name) {
+  std::string_view n = name;
+  while (!n.empty() && (n.back() == ' ' || n.back() == ']' || n.back() == ')')) n.remove_suffix(1);
+  // The last word: after '_', ' ', '.', '[' or '('.
+  const std::size_t cut = n.find_last_of("_ .[(");
+  if (cut == std::string_view::npos) return std::nullopt;
+  return time_unit_from_symbol(n.substr(cut + 1));
 }
 
 TimeUnit time_unit_of(const LogOptions& options, const std::string& column_name) {

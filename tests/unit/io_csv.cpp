@@ -408,6 +408,11 @@ TEST(IoCsv, TimeUnitInTheColumnName) {
   EXPECT_EQ(sysid::time_unit_in_name("t"), std::nullopt);
   EXPECT_EQ(sysid::time_unit_in_name("t_pos"), std::nullopt);
   EXPECT_EQ(sysid::time_unit_in_name("ms"), std::nullopt);  // a name, not a unit after one
+  // The symbols themselves (--time-unit takes the same).
+  EXPECT_EQ(sysid::time_unit_from_symbol("MS"), TimeUnit::milliseconds);
+  EXPECT_EQ(sysid::time_unit_from_symbol("usec"), TimeUnit::microseconds);
+  EXPECT_EQ(sysid::time_unit_from_symbol(""), std::nullopt);
+  EXPECT_EQ(sysid::time_unit_from_symbol("min"), std::nullopt);
 }
 
 TEST(IoCsv, TimeStampsMustIncrease) {

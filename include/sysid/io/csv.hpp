@@ -26,6 +26,7 @@
 #include <Eigen/Dense>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "sysid/core/io_data.hpp"
@@ -107,9 +108,13 @@ enum class TimeUnit { seconds, milliseconds, microseconds };
 /// Seconds per `unit`.
 double seconds_per(TimeUnit unit);
 
-/// The unit a time column's name states, if it states one: a last word "s", "ms",
-/// "us" or "µs" after '_', ' ' or '.', or in brackets or parentheses ("t_ms",
-/// "time [ms]", "Time (us)", "t.s"); any case.
+/// The unit a symbol names: "s" or "sec", "ms" or "msec", "us", "usec" or "µs";
+/// any case. Empty for anything else.
+std::optional<TimeUnit> time_unit_from_symbol(std::string_view symbol);
+
+/// The unit a time column's name states, if it states one: a last word that is a
+/// unit symbol (time_unit_from_symbol) after '_', ' ' or '.', or in brackets or
+/// parentheses ("t_ms", "time [ms]", "Time (us)", "t.s").
 std::optional<TimeUnit> time_unit_in_name(const std::string& name);
 
 /// Which columns make a log, and how to get the sample time.
