@@ -30,7 +30,7 @@ struct N4sidArgs {
   std::string order = "auto";
   // Defaults of --max-order and --order-rule are the library's (N4sidOptions{}).
   int max_order = N4sidOptions{}.max_order;
-  std::string order_rule = N4sidOptions{}.order_rule == OrderRule::svc ? "svc" : "gap";
+  std::string order_rule = to_string(N4sidOptions{}.order_rule);
   int horizon = 0;
   bool enforce_stability = false;
   std::string hankel = "auto";
@@ -187,7 +187,7 @@ void run_n4sid(const N4sidArgs& a) {
                                           : SubspaceWeighting::n4sid;
   options.order = order.fixed;
   options.max_order = a.max_order;
-  options.order_rule = a.order_rule == "svc" ? OrderRule::svc : OrderRule::gap;
+  options.order_rule = order_rule_from_name(a.order_rule);
   options.horizon = a.horizon;
   options.route = a.hankel == "qr"                       ? HankelRoute::qr
                   : a.hankel == "cholesky"               ? HankelRoute::cholesky
@@ -341,13 +341,16 @@ Verb register_n4sid(CLI::App& app) {
             return parse_order(s, spec);
           },
           "N|auto|A:B"));
-  cmd->add_option("--max-order", args->max_order, "largest order the automatic choice considers")
+  cmd->add_option("--max-order", args->max_order,
+                  "largest order the automatic choice considers (0: every order the horizon allows)")
       ->capture_default_str()
-      ->check(CLI::Range(1, 10000));
+      ->check(CLI::Range(0, 10000));
   cmd->add_option("--order-rule", args->order_rule,
-                  "automatic order rule: gap (largest singular-value gap) or svc (Bauer's singular-value criterion)")
+                  "automatic order rule: auto (svc, or test where SVC's penalty swamps the modes, as with many outputs), "
+                  "svc (Bauer's singular-value criterion), test (canonical correlations above the noise level) or gap "
+                  "(largest singular-value gap)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"gap", "svc"}));
+      ->check(CLI::IsMember({"auto", "svc", "gap", "test"}));
   cmd->add_option("--horizon", args->horizon, "block rows i of the past/future Hankel matrix (default: automatic)")
       ->check(CLI::Range(2, 100000));
   cmd->add_flag("--enforce-stability", args->enforce_stability, "estimate A so that the model is always stable");

@@ -223,4 +223,44 @@ double trigamma(double x) {
   return acc + 1.0 / z + 0.5 * z2 + z2 / z * (1.0 / 6.0 - z2 * (1.0 / 30.0 - z2 / 42.0));
 }
 
+// ---------------------------------------------------------------------------
+// Tracy-Widom (beta = 1) and the largest canonical correlation
+// ---------------------------------------------------------------------------
+
+double tracy_widom1_upper_quantile(double p) {
+  if (!(p > 0.0 && p < 1.0)) throw std::invalid_argument("tracy_widom1_upper_quantile: need 0 < p < 1");
+  // The gamma law Gamma(k, theta) - shift with TW1's mean, variance and skewness
+  // (header): skewness 2 / sqrt(k), variance k theta^2, mean k theta - shift.
+  constexpr double mean = -1.2065335745820, variance = 1.6077810345810, skewness = 0.2934645240791;
+  const double k = 4.0 / (skewness * skewness), theta = std::sqrt(variance / k), shift = k * theta - mean;
+  // P(W > x) = Q(k, (x + shift) / theta), decreasing in x: bisection cannot fail.
+  double lo = -shift, hi = 40.0;
+  for (int it = 0; it < 200 && hi - lo > 1e-12; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (regularized_gamma_q(k, (mid + shift) / theta) > p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+LogitTracyWidomLaw largest_canonical_correlation_law(double p_vars, double q_vars, double samples) {
+  if (!(p_vars >= 1.0) || !(q_vars >= 1.0) || !(samples > p_vars + q_vars))
+    throw std::invalid_argument("largest canonical correlation: need p_vars, q_vars >= 1 and samples > p_vars + q_vars");
+  // Johnstone (2008), Theorem 1, with n = q_vars, m = samples - q_vars.
+  const double total = samples - 1.0;  // m + n - 1
+  const double gamma = 2.0 * std::asin(std::sqrt((std::min(q_vars, p_vars) - 0.5) / total));
+  const double phi = 2.0 * std::asin(std::sqrt((std::max(q_vars, p_vars) - 0.5) / total));
+  // samples > p_vars + q_vars keeps phi + gamma below pi (their half-angle sines
+  // squared sum to below 1), so the tangent is finite and positive.
+  LogitTracyWidomLaw law;
+  law.mu = 2.0 * std::log(std::tan(0.5 * (phi + gamma)));
+  law.sigma = std::cbrt(16.0 / (total * total) / (std::pow(std::sin(phi + gamma), 2) * std::sin(phi) * std::sin(gamma)));
+  return law;
+}
+
+double largest_canonical_correlation_upper_quantile(double p, double p_vars, double q_vars, double samples) {
+  if (!(p > 0.0 && p < 1.0)) throw std::invalid_argument("largest_canonical_correlation_upper_quantile: need 0 < p < 1");
+  const LogitTracyWidomLaw law = largest_canonical_correlation_law(p_vars, q_vars, samples);
+  return 1.0 / (1.0 + std::exp(-(law.mu + law.sigma * tracy_widom1_upper_quantile(p))));
+}
+
 }  // namespace sysid

@@ -181,7 +181,7 @@ bool armax_output_error_start(PolynomialModel& model, const std::vector<ScaledRe
 
 bool armax_subspace_start(PolynomialModel& model, const std::vector<ScaledRecord>& records, const PemOptions& options) {
   N4sidOptions so;
-  so.max_order = std::min(options.na, so.max_order);
+  so.max_order = std::min(options.na, detail::kHorizonNominalMaxOrder);
   so.remove_means = false;
   // MOESP weighting: on the band-limited Par2 log its model is far closer to
   // the truth than the N4SID weighting's (bench/README.md: in-band fit 99.05 %

@@ -157,14 +157,63 @@ struct SubspaceCore {
   std::vector<std::string> warnings;
 };
 
+/// What the automatic order choice searches and the dimensions of its statistics.
+struct OrderSearch {
+  int top = 0;                     ///< largest order searched (horizon x outputs - 1, or max_order)
+  Eigen::Index columns = 0;        ///< Hankel columns (SVC's N)
+  Eigen::Index test_samples = 0;   ///< the columns less the future-input rows projected out
+  Eigen::Index future_dims = 0;    ///< future output rows (i l)
+  Eigen::Index past_dims = 0;      ///< past rows kept in the oblique projection
+  Eigen::Index outputs = 0, inputs = 0;
+  double rank_tolerance = 0;
+
+  /// The gap rule's largest order: both singular values of a gap above the rank
+  /// tolerance (a drop into the numerical null space is not a model order).
+  int gap_top(const Eigen::VectorXd& sv, double tol) const {
+    int nonzero = 0;
+    while (nonzero < sv.size() && sv(nonzero) > tol * sv(0)) ++nonzero;
+    return std::max(1, std::min(top, nonzero - 1));
+  }
+  bool test_possible() const { return test_samples > future_dims + past_dims && future_dims >= 1 && past_dims >= 1; }
+};
+
+/// The order by `rule` (subspace/order_selection.hpp). An order of 0 is left to
+/// select_order_when_svc_finds_none.
+inline OrderChoice choose_subspace_order(const SubspaceCore& res, OrderRule rule, const OrderSearch& s) {
+  const double tol = s.rank_tolerance;
+  const auto& cc = res.canonical_correlations;
+  switch (rule) {
+    case OrderRule::gap: return choose_order_by_gap(res.singular_values, s.gap_top(res.singular_values, tol));
+    case OrderRule::test:
+      if (!s.test_possible())
+        throw std::invalid_argument("n4sid: the canonical-correlation order test needs more Hankel columns (" +
+                                    std::to_string(s.test_samples) + ") than past and future dimensions (" +
+                                    std::to_string(s.future_dims + s.past_dims) +
+                                    "); use --order-rule svc or a shorter --horizon");
+      return choose_order_by_correlation_test(cc, s.top, s.test_samples, s.future_dims, s.past_dims);
+    case OrderRule::svc: return choose_order_by_svc(cc, s.top, s.columns, s.outputs, s.inputs);
+    case OrderRule::automatic: break;
+  }
+  OrderChoice svc = choose_order_by_svc(cc, s.top, s.columns, s.outputs, s.inputs);
+  if (!s.test_possible()) return svc;
+  OrderChoice test = choose_order_by_correlation_test(cc, s.top, s.test_samples, s.future_dims, s.past_dims);
+  if (test.order <= svc.order || !svc_is_swamped(test.order, s.columns, s.outputs, s.inputs)) return svc;
+  std::ostringstream why;
+  why << std::setprecision(3) << "; Bauer's SVC (n = " << svc.order << ") is swamped: its penalty for " << test.order
+      << " orders, " << svc_penalty_per_order(s.columns, s.outputs, s.inputs) * test.order
+      << ", exceeds half the largest possible squared correlation";
+  test.rule += why.str();
+  return test;
+}
+
 /// SVC chose order 0. If the canonical correlations are significant (the past
 /// predicts the future), SVC's penalty is what removed every order, not the
 /// data: the largest singular-value gap chooses instead, with a warning. If
 /// they are not, there are no dynamics to identify (NumericalError).
-inline void select_order_when_svc_finds_none(SubspaceCore& res, int top, Eigen::Index columns, Eigen::Index test_samples,
-                                             Eigen::Index future_rows, Eigen::Index past_rows, Eigen::Index l, Eigen::Index m) {
+inline void select_order_when_svc_finds_none(SubspaceCore& res, const OrderSearch& s) {
+  const Eigen::Index columns = s.columns, l = s.outputs, m = s.inputs;
   const CanonicalCorrelationTest test = bartlett_zero_correlation_test(
-      res.canonical_correlations, std::max<Eigen::Index>(test_samples, 1), future_rows, std::max<Eigen::Index>(past_rows, 1));
+      res.canonical_correlations, std::max<Eigen::Index>(s.test_samples, 1), s.future_dims, std::max<Eigen::Index>(s.past_dims, 1));
   std::ostringstream why;
   why << std::setprecision(4) << "Bauer's SVC chose order 0 (its penalty " << svc_penalty_per_order(columns, l, m)
       << " per order, from " << columns << " Hankel columns, " << l << " output(s) and " << m
@@ -177,7 +226,7 @@ inline void select_order_when_svc_finds_none(SubspaceCore& res, int top, Eigen::
     else why << "too few samples for Bartlett's test of past-future correlation";
     throw NumericalError("n4sid: no dynamics to identify: " + why.str() + "; give an order with --order N");
   }
-  const OrderChoice gap = choose_order_by_gap(res.singular_values, top);
+  const OrderChoice gap = choose_order_by_gap(res.singular_values, s.gap_top(res.singular_values, s.rank_tolerance));
   why << ", yet the correlations are significant (Bartlett's test p = " << test.p_value << ")";
   res.order = gap.order;
   res.order_rule = gap.rule + "; Bauer's SVC chose 0, see the warning";
@@ -262,17 +311,18 @@ inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& option
     res.order = options.order;
     res.order_rule = "given by the user";
   } else {
-    const int top = std::min<int>(options.max_order, static_cast<int>(i * l) - 1);
-    const OrderChoice choice = options.order_rule == OrderRule::svc
-                                   ? choose_order_by_svc(res.canonical_correlations, top, hc.columns, l, m)
-                                   : choose_order_by_gap(res.singular_values, top);
-    res.order = choice.order;
-    res.order_rule = choice.rule;
+    int top = static_cast<int>(i * l) - 1;
+    if (options.max_order > 0) top = std::min(top, options.max_order);
     // The correlations are those left after projecting out the future inputs:
     // that regression uses uf.rows() of the columns' degrees of freedom.
-    if (res.order < 1)
-      select_order_when_svc_finds_none(res, top, hc.columns, hc.columns - uf.rows(), yf.rows(),
-                                       wp.rows() - oi.dropped_directions, l, m);
+    const OrderSearch search{top, hc.columns, hc.columns - uf.rows(), yf.rows(), wp.rows() - oi.dropped_directions, l, m, tol};
+    const OrderChoice choice = choose_subspace_order(res, options.order_rule, search);
+    res.order = choice.order;
+    res.order_rule = choice.rule;
+    if (res.order < 1 && options.order_rule == OrderRule::test)
+      throw NumericalError("n4sid: no dynamics to identify: no canonical correlation between past and future stands above "
+                           "the noise level (" + choice.rule + "); give an order with --order N");
+    if (res.order < 1) select_order_when_svc_finds_none(res, search);
   }
   const Eigen::Index n = res.order;
   if (n >= res.singular_values.size() || res.singular_values(n - 1) <= tol * res.singular_values(0))
@@ -363,7 +413,7 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
   const Eigen::Index m = data.inputs(), l = data.outputs();
   if (m < 1) throw std::invalid_argument("n4sid: need at least one input");
   if (options.order < 0) throw std::invalid_argument("n4sid: need order >= 0 (0 = automatic)");
-  if (options.order == 0 && options.max_order < 1) throw std::invalid_argument("n4sid: need max_order >= 1");
+  if (options.order == 0 && options.max_order < 0) throw std::invalid_argument("n4sid: need max_order >= 0 (0 = no cap)");
 
   N4sidResult res;
   res.weighting = options.weighting;

@@ -103,14 +103,20 @@ TEST(SubspaceDaisy, AutomaticOrderGivesAModelOnEverySet) {
   }
 }
 
-TEST(SubspaceDaisy, SvcFallbackOnTheGlassFurnaceAndThePowerPlant) {
+TEST(SubspaceDaisy, SwampedSvcOnTheGlassFurnaceAndThePowerPlant) {
+  // Six (three) outputs and 600 (100) samples per half: SVC's penalty exceeds
+  // every drop of the squared correlations, and the canonical-correlation test
+  // chooses (subspace/order_selection.hpp). On the glass furnace its order (9,
+  // 2026-11-28) predicts the second half at 54.0 % mean fit, where the gap rule's
+  // former order 1 gave 27-53 %: the bound is a few points under today's result.
   if (!std::filesystem::exists(kReal + "daisy_glass_furnace")) GTEST_SKIP() << "no " << kReal;
   for (const DaisySet& set : {DaisySet{"daisy_glass_furnace", "glassfurnace.csv", names("u", 3), names("y", 6), false},
                               DaisySet{"daisy_power_plant", "powerplant.csv", names("u", 5), names("y", 3), true}}) {
     SCOPED_TRACE(set.folder);
     const Identified id = identify_first_half(set);
-    EXPECT_TRUE(has_warning(id.result, "Bauer's SVC chose order 0")) << id.result.order_rule;
-    EXPECT_NE(id.result.order_rule.find("singular-value gap"), std::string::npos) << id.result.order_rule;
+    EXPECT_NE(id.result.order_rule.find("canonical-correlation test"), std::string::npos) << id.result.order_rule;
+    EXPECT_NE(id.result.order_rule.find("SVC (n = 0) is swamped"), std::string::npos) << id.result.order_rule;
+    if (set.folder == "daisy_glass_furnace") EXPECT_GT(id.validation_fit.mean(), 50.0);
   }
 }
 

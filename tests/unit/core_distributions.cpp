@@ -1,6 +1,7 @@
 // Tests of core/distributions.hpp: the normal and chi-square quantiles, the
 // incomplete gamma function and the chi-square distribution, the incomplete beta
-// function with the Beta and F distributions, digamma and trigamma; against closed
+// function with the Beta and F distributions, digamma and trigamma, the Tracy-Widom
+// law and the largest canonical correlation; against closed
 // forms, exact finite sums and table values (SciPy, Abramowitz & Stegun).
 #include <sysid/core/distributions.hpp>
 
@@ -10,6 +11,8 @@
 #include <limits>
 #include <numbers>
 #include <stdexcept>
+
+#include "random_matrices.hpp"
 
 namespace test_unit_core_distributions {
 
@@ -203,6 +206,59 @@ TEST(DistributionsDigamma, KnownValuesAndRecurrence) {
   // + 1/(6 x^3) + O(x^-5).
   EXPECT_NEAR(digamma_minus_log(1e4), -0.5e-4 - 1.0 / 12.0 * 1e-8, 1e-18);
   EXPECT_NEAR(trigamma(1e4), 1e-4 + 0.5e-8 + 1.0 / 6.0 * 1e-12, 1e-18);
+}
+
+// ---- Tracy-Widom and the largest canonical correlation -----------------------------
+
+TEST(DistributionsTracyWidom, QuantilesOfTheLaw) {
+  // TW1 quantiles from the law itself (C. A. Tracy, H. Widom, Commun. Math. Phys.
+  // 177 (1996); tabulated e.g. by Bejan 2005 and Bornemann 2010): F1(0.4501) = 0.90,
+  // F1(0.9793) = 0.95, F1(2.0234) = 0.99. The gamma approximation is stated within
+  // 0.01 of them in the right tail; a wrong moment or a swapped parameter moves
+  // them by 0.1 or more.
+  EXPECT_NEAR(sysid::tracy_widom1_upper_quantile(0.10), 0.4501, 0.02);
+  EXPECT_NEAR(sysid::tracy_widom1_upper_quantile(0.05), 0.9793, 0.02);
+  EXPECT_NEAR(sysid::tracy_widom1_upper_quantile(0.01), 2.0234, 0.02);
+  EXPECT_GT(sysid::tracy_widom1_upper_quantile(1e-3), sysid::tracy_widom1_upper_quantile(1e-2));
+  EXPECT_THROW(sysid::tracy_widom1_upper_quantile(0.0), std::invalid_argument);
+  EXPECT_THROW(sysid::tracy_widom1_upper_quantile(1.0), std::invalid_argument);
+}
+
+TEST(DistributionsTracyWidom, LargestCanonicalCorrelationHasItsStatedLevel) {
+  // 400 pairs of independent Gaussian sets (6 and 10 variables, 300 samples): the
+  // largest squared sample canonical correlation exceeds the 5 % quantile in
+  // binomial(400, 0.05) cases, mean 20; outside 8..34 has probability below 1e-3
+  // if the level holds (Johnstone reports the approximation good at such sizes).
+  const double c = sysid::largest_canonical_correlation_upper_quantile(0.05, 6, 10, 300);
+  int above = 0;
+  for (std::uint64_t trial = 0; trial < 400; ++trial) {
+    const Eigen::MatrixXd x = sysid::test::white_noise(300, 6, 7000 + trial);
+    const Eigen::MatrixXd y = sysid::test::white_noise(300, 10, 9000 + trial);
+    const Eigen::MatrixXd qx = Eigen::HouseholderQR<Eigen::MatrixXd>(x).householderQ() * Eigen::MatrixXd::Identity(300, 6);
+    const Eigen::MatrixXd qy = Eigen::HouseholderQR<Eigen::MatrixXd>(y).householderQ() * Eigen::MatrixXd::Identity(300, 10);
+    const double r1 = Eigen::JacobiSVD<Eigen::MatrixXd>(qx.transpose() * qy).singularValues()(0);
+    if (r1 * r1 > c) ++above;
+  }
+  EXPECT_GE(above, 8);
+  EXPECT_LE(above, 34);
+}
+
+TEST(DistributionsTracyWidom, LargestCanonicalCorrelationTendsToWachtersEdge) {
+  // Dimensions in proportion to the samples: the quantile approaches Wachter's
+  // edge (sqrt(c1 (1 - c2)) + sqrt(c2 (1 - c1)))^2 at the rate N^(-2/3).
+  const double c1 = 0.03, c2 = 0.035;
+  const double edge = std::pow(std::sqrt(c1 * (1 - c2)) + std::sqrt(c2 * (1 - c1)), 2);
+  double previous = 1.0;
+  for (double n : {1e4, 1e5, 1e6}) {
+    const double c = sysid::largest_canonical_correlation_upper_quantile(1e-3, c1 * n, c2 * n, n);
+    EXPECT_GT(c, edge);
+    EXPECT_LT(c - edge, previous);
+    previous = c - edge;
+  }
+  EXPECT_LT(previous, 1e-3);
+  // Sets nearly as large as the samples: nearly any correlation occurs by chance.
+  EXPECT_GT(sysid::largest_canonical_correlation_upper_quantile(0.01, 450, 500, 960), 0.9);
+  EXPECT_THROW(sysid::largest_canonical_correlation_upper_quantile(0.01, 4, 6, 10), std::invalid_argument);
 }
 
 }  // namespace test_unit_core_distributions

@@ -7,7 +7,9 @@
 /// survival function (the Ljung-Box and Bartlett p-values), the regularized
 /// incomplete beta function with the Beta and F upper quantiles and the F survival
 /// function (the F tests of diagnose's mismatch location), and the digamma and
-/// trigamma functions (the bias and variance of a log-chi-square variable).
+/// trigamma functions (the bias and variance of a log-chi-square variable), and the
+/// Tracy-Widom law with the largest canonical correlation of independent sets (the
+/// noise level of subspace identification's order test).
 ///
 /// Method:
 /// - normal quantile: bisection of Phi(z) = erfc(-z / sqrt 2) / 2 = p on [-40, 40]
@@ -97,5 +99,47 @@ double f_sf(double x, double d1, double d2);
 /// checked).
 double digamma_minus_log(double x);
 double trigamma(double x);
+
+// ---------------------------------------------------------------------------
+// Tracy-Widom (beta = 1) and the largest canonical correlation
+// ---------------------------------------------------------------------------
+
+/// x with P(W > x) = p for W of the Tracy-Widom law of order 1 (the real case).
+/// Method: the shifted gamma with the law's first three moments (mean -1.2065336,
+/// variance 1.6077810, skewness 0.2934645; F. Bornemann, "On the numerical
+/// evaluation of distributions in random matrix theory", Markov Processes Relat.
+/// Fields 16 (2010)); M. Chiani, "Distribution of the largest eigenvalue for real
+/// Wishart and Gaussian random matrices and a simple approximation for the
+/// Tracy-Widom distribution", J. Multivariate Anal. 129 (2014) 69-81, shows it is
+/// within 0.01 of the law's quantiles over the right tail used here.
+/// Preconditions: 0 < p < 1 (std::invalid_argument).
+double tracy_widom1_upper_quantile(double p);
+
+/// c with P(r_1^2 > c) ~ p, where r_1 is the largest sample canonical correlation
+/// between a p_vars- and a q_vars-dimensional set of independent Gaussian
+/// variables observed `samples` times (the level of Roy's largest-root test).
+/// Method: r_1^2 is the largest root of the Jacobi ensemble with p_vars variables,
+/// hypothesis dof n = q_vars and error dof m = samples - q_vars, whose logit is
+/// near mu + sigma W with W Tracy-Widom (order 1) (I. M. Johnstone, "Multivariate
+/// analysis and Jacobi ensembles: largest eigenvalue, Tracy-Widom limits and rates
+/// of convergence", Ann. Statist. 36 (2008) 2638-2716, Theorem 1):
+///   sin^2(gamma/2) = (min(n, p) - 1/2) / (m + n - 1),
+///   sin^2(phi/2)   = (max(n, p) - 1/2) / (m + n - 1),
+///   mu = 2 log tan((phi + gamma)/2),
+///   sigma^3 = 16 / (m + n - 1)^2 / (sin^2(phi + gamma) sin(phi) sin(gamma)).
+/// As samples grow with the dimensions in proportion, c tends to Wachter's edge
+/// (sqrt(c1 (1 - c2)) + sqrt(c2 (1 - c1)))^2, c1 = p_vars / samples,
+/// c2 = q_vars / samples. Johnstone reports the approximation good for dimensions
+/// as small as 2 to 5.
+/// Preconditions: 0 < p < 1, p_vars >= 1, q_vars >= 1, samples > p_vars + q_vars
+/// (std::invalid_argument).
+double largest_canonical_correlation_upper_quantile(double p, double p_vars, double q_vars, double samples);
+
+/// The centre mu and scale sigma of that approximation: logit(r_1^2) ~ mu + sigma W.
+/// Preconditions as largest_canonical_correlation_upper_quantile, without p.
+struct LogitTracyWidomLaw {
+  double mu = 0, sigma = 0;
+};
+LogitTracyWidomLaw largest_canonical_correlation_law(double p_vars, double q_vars, double samples);
 
 }  // namespace sysid

@@ -80,14 +80,16 @@ struct N4sidOptions {
   SubspaceWeighting weighting = SubspaceWeighting::n4sid;
   /// Model order; 0 = choose automatically from the singular values (see order_rule).
   int order = 0;
-  /// Largest order considered by the automatic choice.
-  int max_order = 20;
-  OrderRule order_rule = OrderRule::svc;  ///< see subspace/order_selection.hpp
+  /// Largest order considered by the automatic choice; 0 = no cap: every order
+  /// the horizon allows (horizon x outputs - 1; the gap rule stops where the
+  /// singular values reach rank_tolerance).
+  int max_order = 0;
+  OrderRule order_rule = OrderRule::automatic;  ///< see subspace/order_selection.hpp
   /// Block rows i of the past (and of the future); 0 = automatic: for a given
   /// order n, i = max(10, 2 ceil(n / l)); for the automatic order choice
-  /// i = max(10, ceil(1.5 max_order / l)) to choose the order, then the model of
-  /// the chosen order is identified again with the horizon for that order.
-  /// Reduced if the data are short.
+  /// i = max(10, ceil(1.5 M / l)) with M = max_order, or 20 when max_order is 0,
+  /// to choose the order, then the model of the chosen order is identified again
+  /// with the horizon for that order. Reduced if the data are short.
   int horizon = 0;
   HankelRoute route = HankelRoute::automatic;
   bool remove_means = true;        ///< subtract channel means first (offsets returned in the result)
@@ -168,11 +170,15 @@ struct N4sidResult {
 
 namespace detail {
 
+/// The order the automatic horizon is sized for when max_order is 0 (no cap).
+inline constexpr int kHorizonNominalMaxOrder = 20;
+
 /// The automatic horizon of N4sidOptions::horizon.
 inline int automatic_horizon(int order, int max_order, Eigen::Index outputs) {
   const auto l = static_cast<double>(outputs);
   if (order > 0) return std::max(10, 2 * static_cast<int>(std::ceil(order / l)));
-  return std::max(10, static_cast<int>(std::ceil(1.5 * max_order / l)));
+  const int sized_for = max_order > 0 ? max_order : kHorizonNominalMaxOrder;
+  return std::max(10, static_cast<int>(std::ceil(1.5 * sized_for / l)));
 }
 
 }  // namespace detail

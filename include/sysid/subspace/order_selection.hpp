@@ -3,7 +3,7 @@
 /// Purpose: choose the model order from the singular values of the weighted
 /// oblique projection of subspace identification.
 ///
-/// Method: two rules; the result says which one chose the order and why.
+/// Method: three rules; the result says which one chose the order and why.
 ///  - svc (default): Bauer's singular-value criterion on the canonical
 ///    correlations sigma_k between future outputs (future inputs projected out)
 ///    and the past (D. Bauer, "Order estimation for subspace methods",
@@ -17,6 +17,20 @@
 ///    singular values over 1..max_order, i.e. the largest drop on the usual
 ///    log-scale plot (Van Overschee & De Moor 1996, sec. 4.3.2, made automatic).
 ///    Scale-free but blind to weak modes behind a large gap.
+///  - test: a sequential largest-root test of the canonical correlations (Roy's
+///    test; T. W. Anderson, "An Introduction to Multivariate Statistical
+///    Analysis", 3rd ed., sec. 12.4 and 8.6): the order is the number of
+///    canonical correlations that stand above what noise gives, the k-th tested
+///    against the largest correlation of independent sets of i l - k future and
+///    q - k past dimensions over the regression's samples, at level 1e-3, with
+///    the Tracy-Widom approximation of that largest root (core/distributions.hpp,
+///    Johnstone 2008), its scale widened for the Hankel columns' dependence
+///    (kHankelScaleInflation). For a system of order n the projection of the future on
+///    the past has rank n whatever the horizon (the future is Gamma_i x_i plus
+///    terms independent of the past), so past the true order only sampling noise
+///    is left. The noise level grows with the dimensions (about
+///    sqrt(i l / N) + sqrt(q / N)) instead of with a parameter count, so with
+///    many outputs it does not swamp real modes.
 ///
 /// SVC's penalty grows with n (2l + m): with many outputs and few samples it can
 /// exceed every drop of sigma_{n+1}^2 even when the canonical correlations are
@@ -24,19 +38,49 @@
 /// 0.9999, 0.9987, 0.993, ... decline gradually and SVC returns 0). Whether the
 /// past predicts the future at all is then a separate question, answered by
 /// bartlett_zero_correlation_test below; n4sid falls back to the gap rule when
-/// it does (subspace/n4sid.hpp).
+/// it does (subspace/n4sid.hpp). With tens of outputs SVC is blind even to
+/// perfectly correlated modes: its penalty for n orders, n log(N)/N (2l + m),
+/// exceeds 1 (the largest squared correlation) at n = N / (log(N) (2l + m)), 16
+/// for 28 outputs, 2 inputs and 8 500 samples. n4sid's default rule (automatic)
+/// is SVC unless the test finds an order at which SVC's penalty exceeds 1/2:
+/// then the test chooses (svc_is_swamped).
 ///
 /// Preconditions: singular values sorted descending, 1 <= max_order < size.
 #include <sysid/core/distributions.hpp>
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
 namespace sysid {
 
-enum class OrderRule { gap, svc };
+enum class OrderRule {
+  automatic,  ///< svc, or test where SVC's penalty swamps the order the test finds (svc_is_swamped)
+  svc,
+  gap,
+  test,
+};
+
+/// The rule's name on the command line: auto, svc, gap, test.
+inline const char* to_string(OrderRule rule) {
+  switch (rule) {
+    case OrderRule::automatic: return "auto";
+    case OrderRule::svc: return "svc";
+    case OrderRule::gap: return "gap";
+    case OrderRule::test: return "test";
+  }
+  return "?";
+}
+
+/// The rule named `name` (to_string's names); std::invalid_argument otherwise.
+inline OrderRule order_rule_from_name(const std::string& name) {
+  for (const OrderRule r : {OrderRule::automatic, OrderRule::svc, OrderRule::gap, OrderRule::test})
+    if (name == to_string(r)) return r;
+  throw std::invalid_argument("unknown order rule '" + name + "' (auto, svc, gap or test)");
+}
 
 struct OrderChoice {
   int order = 0;
@@ -87,6 +131,86 @@ inline OrderChoice choose_order_by_svc(const Eigen::VectorXd& sv, int max_order,
   }
   best.rule = "Bauer's SVC criterion (canonical correlations, penalty log(N)/N): n = " + std::to_string(best.order);
   return best;
+}
+
+/// The level of the sequential canonical-correlation test (the probability that
+/// a noise correlation is taken for a mode at the true order, were the Hankel
+/// columns independent samples).
+inline constexpr double kOrderTestLevel = 1e-3;
+
+/// The Hankel columns are not independent samples: each shares all but one of
+/// its values with the next. On white-noise data (the subspace core's canonical
+/// correlations of independent white inputs and outputs, 300 records per case,
+/// tests/unit/subspace_order_selection.cpp repeats one) the largest correlation
+/// keeps the Jacobi law's centre (median of the standardised statistic -0.4 to
+/// -2.3 against Tracy-Widom's -1.27) but not its scale: its 99th percentile is
+/// 3.1 to 6.2 with 2 to 28 outputs and 8 with one output and horizon 20, against
+/// Tracy-Widom's 2.02. The test therefore takes the law's scale three times
+/// larger: the noise level is logit^-1(mu + 3 sigma W_{1-level}), mu + 9.8 sigma
+/// at level 1e-3, above every one of those 1 530 records but the one-output
+/// horizon-20 case's largest (13.5).
+inline constexpr double kHankelScaleInflation = 3.0;
+
+/// The noise level of the test for the (n+1)-th correlation: the level's
+/// quantile of the largest correlation of independent sets of the remaining
+/// dimensions, with the scale widened by kHankelScaleInflation.
+inline double correlation_noise_level(int n, Eigen::Index samples, Eigen::Index future_dims, Eigen::Index past_dims,
+                                      double level) {
+  const LogitTracyWidomLaw law = largest_canonical_correlation_law(
+      static_cast<double>(std::max<Eigen::Index>(future_dims - n, 1)), static_cast<double>(std::max<Eigen::Index>(past_dims - n, 1)),
+      static_cast<double>(samples - n));
+  const double logit = law.mu + kHankelScaleInflation * law.sigma * tracy_widom1_upper_quantile(level);
+  return std::sqrt(1.0 / (1.0 + std::exp(-logit)));
+}
+
+/// The sequential largest-root test of the file comment. `correlations`:
+/// canonical correlations, descending; samples: the regression's samples (Hankel
+/// columns less the future-input rows projected out); future_dims, past_dims:
+/// the dimensions of the two sets. Searches orders 0..max_order (capped by the
+/// correlations there are); the rule says how far the last kept and the first
+/// rejected correlation stand from the noise level.
+inline OrderChoice choose_order_by_correlation_test(const Eigen::VectorXd& correlations, int max_order, Eigen::Index samples,
+                                                    Eigen::Index future_dims, Eigen::Index past_dims,
+                                                    double level = kOrderTestLevel) {
+  const int top = std::min<int>(max_order, static_cast<int>(correlations.size()) - 1);
+  if (top < 1) throw std::invalid_argument("order selection: need max_order >= 1 and 2 correlations");
+  if (samples <= future_dims + past_dims)
+    throw std::invalid_argument("order selection: the canonical-correlation test needs more samples than dimensions (" +
+                                std::to_string(samples) + " <= " + std::to_string(future_dims + past_dims) + ")");
+  OrderChoice best;
+  double kept_level = 0.0, next_level = 0.0;
+  int n = 0;
+  for (; n <= top; ++n) {
+    next_level = correlation_noise_level(n, samples, future_dims, past_dims, level);
+    if (correlations(n) <= next_level) break;
+    kept_level = next_level;
+  }
+  const bool capped = n > top;
+  best.order = capped ? top : n;
+  best.score = best.order > 0 ? correlations(best.order - 1) / kept_level : 0.0;
+  auto fixed = [](double v) {
+    std::ostringstream s;
+    s << std::setprecision(3) << v;
+    return s.str();
+  };
+  best.rule = "canonical-correlation test (largest root, level " + fixed(level) + "): ";
+  if (best.order > 0)
+    best.rule += "r_" + std::to_string(best.order) + " = " + fixed(correlations(best.order - 1)) + " stands above the noise level " +
+                 fixed(kept_level);
+  if (capped)
+    best.rule += ", and so does every correlation up to the search limit " + std::to_string(top) +
+                 " (the order may be higher: raise --horizon or --max-order)";
+  else
+    best.rule += std::string(best.order > 0 ? ", " : "") + "r_" + std::to_string(best.order + 1) + " = " +
+                 fixed(correlations(best.order)) + " does not (noise level " + fixed(next_level) + ")";
+  return best;
+}
+
+/// Whether SVC's penalty swamps `order` (see the file comment): its penalty for
+/// that many orders exceeds half the largest possible squared correlation, so
+/// SVC cannot choose it however clearly the data show it.
+inline bool svc_is_swamped(int order, Eigen::Index samples, Eigen::Index outputs, Eigen::Index inputs) {
+  return svc_penalty_per_order(samples, outputs, inputs) * order > 0.5;
 }
 
 /// Bartlett's test that all canonical correlations between a p- and a
