@@ -153,6 +153,21 @@ TEST_F(N4sidApp, DefaultRuleFindsTheModes) {
   EXPECT_GT(fresh_fit(model), 95.0);
 }
 
+TEST_F(N4sidApp, CorrelationTestRuleIsSelectableAndNamed) {
+  // --order-rule test: the canonical correlations above the noise level; the
+  // report names the rule and the correlations on either side of the order.
+  const std::string model = path("test_rule.json");
+  const CliResult r = run_cli({"n4sid", path("log.csv"), "--inputs", "u", "--outputs", "y", "--order-rule", "test",
+                               "--max-order", "0", "--out", model});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_EQ(printed_order(r.out), 4) << r.out;
+  EXPECT_NE(r.out.find("(canonical-correlation test (largest root, level 0.001): r_4 = "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("r_5 = "), std::string::npos) << r.out;
+  const CliResult bad = run_cli({"n4sid", path("log.csv"), "--inputs", "u", "--outputs", "y", "--order-rule", "aic"});
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.err.find("--order-rule"), std::string::npos) << describe(bad);
+}
+
 TEST_F(N4sidApp, SplitValidatesOnTheHeldOutSamples) {
   const std::string model = path("split.json");
   const CliResult r = run_cli(
