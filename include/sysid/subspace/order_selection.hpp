@@ -151,15 +151,16 @@ inline constexpr double kOrderTestLevel = 1e-3;
 /// horizon-20 case's largest (13.5).
 inline constexpr double kHankelScaleInflation = 3.0;
 
-/// The noise level of the test for the (n+1)-th correlation: the level's
-/// quantile of the largest correlation of independent sets of the remaining
-/// dimensions, with the scale widened by kHankelScaleInflation.
+/// The noise level of the test for the (n+1)-th correlation: the quantile of the
+/// largest correlation of independent sets of the remaining dimensions at the
+/// Tracy-Widom quantile `tw_quantile` (of the test's level), with the scale
+/// widened by kHankelScaleInflation.
 inline double correlation_noise_level(int n, Eigen::Index samples, Eigen::Index future_dims, Eigen::Index past_dims,
-                                      double level) {
+                                      double tw_quantile) {
   const LogitTracyWidomLaw law = largest_canonical_correlation_law(
       static_cast<double>(std::max<Eigen::Index>(future_dims - n, 1)), static_cast<double>(std::max<Eigen::Index>(past_dims - n, 1)),
       static_cast<double>(samples - n));
-  const double logit = law.mu + kHankelScaleInflation * law.sigma * tracy_widom1_upper_quantile(level);
+  const double logit = law.mu + kHankelScaleInflation * law.sigma * tw_quantile;
   return std::sqrt(1.0 / (1.0 + std::exp(-logit)));
 }
 
@@ -179,9 +180,10 @@ inline OrderChoice choose_order_by_correlation_test(const Eigen::VectorXd& corre
                                 std::to_string(samples) + " <= " + std::to_string(future_dims + past_dims) + ")");
   OrderChoice best;
   double kept_level = 0.0, next_level = 0.0;
+  const double tw_quantile = tracy_widom1_upper_quantile(level);  // one bisection, not one per order
   int n = 0;
   for (; n <= top; ++n) {
-    next_level = correlation_noise_level(n, samples, future_dims, past_dims, level);
+    next_level = correlation_noise_level(n, samples, future_dims, past_dims, tw_quantile);
     if (correlations(n) <= next_level) break;
     kept_level = next_level;
   }
