@@ -14,6 +14,8 @@
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "cli_common.hpp"
 #include "plot.hpp"
@@ -350,7 +352,11 @@ Verb register_n4sid(CLI::App& app) {
                   "svc (Bauer's singular-value criterion), test (canonical correlations above the noise level) or gap "
                   "(largest singular-value gap)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"auto", "svc", "gap", "test"}));
+      ->check(CLI::IsMember([] {
+        std::vector<std::string> names;
+        for (const OrderRule r : kOrderRules) names.emplace_back(to_string(r));
+        return names;
+      }()));
   cmd->add_option("--horizon", args->horizon, "block rows i of the past/future Hankel matrix (default: automatic)")
       ->check(CLI::Range(2, 100000));
   cmd->add_flag("--enforce-stability", args->enforce_stability, "estimate A so that the model is always stable");

@@ -169,28 +169,33 @@ struct OrderSearch {
 
   /// The gap rule's largest order: both singular values of a gap above the rank
   /// tolerance (a drop into the numerical null space is not a model order).
-  int gap_top(const Eigen::VectorXd& sv, double tol) const {
+  int gap_top(const Eigen::VectorXd& sv) const {
     int nonzero = 0;
-    while (nonzero < sv.size() && sv(nonzero) > tol * sv(0)) ++nonzero;
+    while (nonzero < sv.size() && sv(nonzero) > rank_tolerance * sv(0)) ++nonzero;
     return std::max(1, std::min(top, nonzero - 1));
   }
   bool test_possible() const { return test_samples > future_dims + past_dims && future_dims >= 1 && past_dims >= 1; }
 };
 
-/// The order by `rule` (subspace/order_selection.hpp). An order of 0 is left to
-/// select_order_when_svc_finds_none.
+/// The order by `rule` (subspace/order_selection.hpp). An order of 0 from SVC
+/// (alone or in the automatic rule) is left to select_order_when_svc_finds_none;
+/// from the test it means no dynamics (NumericalError).
 inline OrderChoice choose_subspace_order(const SubspaceCore& res, OrderRule rule, const OrderSearch& s) {
-  const double tol = s.rank_tolerance;
   const auto& cc = res.canonical_correlations;
   switch (rule) {
-    case OrderRule::gap: return choose_order_by_gap(res.singular_values, s.gap_top(res.singular_values, tol));
-    case OrderRule::test:
+    case OrderRule::gap: return choose_order_by_gap(res.singular_values, s.gap_top(res.singular_values));
+    case OrderRule::test: {
       if (!s.test_possible())
         throw std::invalid_argument("n4sid: the canonical-correlation order test needs more Hankel columns (" +
                                     std::to_string(s.test_samples) + ") than past and future dimensions (" +
                                     std::to_string(s.future_dims + s.past_dims) +
                                     "); use --order-rule svc or a shorter --horizon");
-      return choose_order_by_correlation_test(cc, s.top, s.test_samples, s.future_dims, s.past_dims);
+      OrderChoice test = choose_order_by_correlation_test(cc, s.top, s.test_samples, s.future_dims, s.past_dims);
+      if (test.order < 1)
+        throw NumericalError("n4sid: no dynamics to identify: no canonical correlation between past and future stands above "
+                             "the noise level (" + test.rule + "); give an order with --order N");
+      return test;
+    }
     case OrderRule::svc: return choose_order_by_svc(cc, s.top, s.columns, s.outputs, s.inputs);
     case OrderRule::automatic: break;
   }
@@ -226,7 +231,7 @@ inline void select_order_when_svc_finds_none(SubspaceCore& res, const OrderSearc
     else why << "too few samples for Bartlett's test of past-future correlation";
     throw NumericalError("n4sid: no dynamics to identify: " + why.str() + "; give an order with --order N");
   }
-  const OrderChoice gap = choose_order_by_gap(res.singular_values, s.gap_top(res.singular_values, s.rank_tolerance));
+  const OrderChoice gap = choose_order_by_gap(res.singular_values, s.gap_top(res.singular_values));
   why << ", yet the correlations are significant (Bartlett's test p = " << test.p_value << ")";
   res.order = gap.order;
   res.order_rule = gap.rule + "; Bauer's SVC chose 0, see the warning";
@@ -319,9 +324,6 @@ inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& option
     const OrderChoice choice = choose_subspace_order(res, options.order_rule, search);
     res.order = choice.order;
     res.order_rule = choice.rule;
-    if (res.order < 1 && options.order_rule == OrderRule::test)
-      throw NumericalError("n4sid: no dynamics to identify: no canonical correlation between past and future stands above "
-                           "the noise level (" + choice.rule + "); give an order with --order N");
     if (res.order < 1) select_order_when_svc_finds_none(res, search);
   }
   const Eigen::Index n = res.order;

@@ -84,13 +84,19 @@ ManySensorCase simulate_case(Eigen::Index samples, std::uint64_t seed) {
   return c;
 }
 
+/// The case both tests use, simulated once (8 500 samples, seed 2026).
+const ManySensorCase& many_sensor_case() {
+  static const ManySensorCase c = simulate_case(8500, 2026);
+  return c;
+}
+
 /// Natural frequency (Hz) of a discrete pole.
 double pole_frequency_hz(std::complex<double> z) { return std::abs(std::log(z)) * kFs / (2.0 * std::numbers::pi); }
 
 }  // namespace
 
 TEST(ManySensorsAcceptance, AutomaticOrderAndEveryModeOfA28SensorBeam) {
-  const ManySensorCase c = simulate_case(8500, 2026);
+  const ManySensorCase& c = many_sensor_case();
   const Eigen::VectorXd& f_true = c.truth.modes.natural_frequencies_hz;
   ASSERT_EQ(f_true.size(), kModes);
   ASSERT_LT(f_true(kModes - 1), 0.5 * kFs);
@@ -118,7 +124,7 @@ TEST(ManySensorsAcceptance, SvcAloneIsSwampedThere) {
   // (its penalty for 24 orders exceeds every squared correlation), and n4sid's
   // fallback for that case, the largest singular-value gap, now searches every
   // order the horizon allows instead of stopping at 20.
-  const ManySensorCase c = simulate_case(8500, 2026);
+  const ManySensorCase& c = many_sensor_case();
   N4sidOptions o;
   o.order_rule = OrderRule::svc;
   const N4sidResult svc = n4sid(c.data, o);

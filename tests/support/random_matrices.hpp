@@ -68,4 +68,12 @@ inline double match_error(const Eigen::VectorXcd& expected, const Eigen::VectorX
   return worst;
 }
 
+/// Sample canonical correlations between the columns of x and y (the singular
+/// values of Qx^T Qy from thin QRs), descending.
+inline Eigen::VectorXd canonical_correlations(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y) {
+  const Eigen::MatrixXd qx = Eigen::HouseholderQR<Eigen::MatrixXd>(x).householderQ() * Eigen::MatrixXd::Identity(x.rows(), x.cols());
+  const Eigen::MatrixXd qy = Eigen::HouseholderQR<Eigen::MatrixXd>(y).householderQ() * Eigen::MatrixXd::Identity(y.rows(), y.cols());
+  return Eigen::JacobiSVD<Eigen::MatrixXd>(qx.transpose() * qy).singularValues();
+}
+
 }  // namespace sysid::test

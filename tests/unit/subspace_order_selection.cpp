@@ -15,13 +15,7 @@
 
 namespace test_unit_subspace_order_selection {
 
-/// Canonical correlations between the columns of x and y (singular values of
-/// Qx^T Qy from thin QRs).
-Eigen::VectorXd canonical_correlations(const Eigen::MatrixXd& x, const Eigen::MatrixXd& y) {
-  const Eigen::MatrixXd qx = Eigen::HouseholderQR<Eigen::MatrixXd>(x).householderQ() * Eigen::MatrixXd::Identity(x.rows(), x.cols());
-  const Eigen::MatrixXd qy = Eigen::HouseholderQR<Eigen::MatrixXd>(y).householderQ() * Eigen::MatrixXd::Identity(y.rows(), y.cols());
-  return Eigen::JacobiSVD<Eigen::MatrixXd>(qx.transpose() * qy).singularValues();
-}
+using sysid::test::canonical_correlations;
 
 TEST(BartlettTest, LevelOnIndependentSetsIsNearNominal) {
   // 300 pairs of independent 4- and 6-dimensional Gaussian sets of 200 samples:

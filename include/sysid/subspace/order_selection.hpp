@@ -75,9 +75,12 @@ inline const char* to_string(OrderRule rule) {
   return "?";
 }
 
+/// Every rule, in the order the command line lists them.
+inline constexpr OrderRule kOrderRules[] = {OrderRule::automatic, OrderRule::svc, OrderRule::gap, OrderRule::test};
+
 /// The rule named `name` (to_string's names); std::invalid_argument otherwise.
 inline OrderRule order_rule_from_name(const std::string& name) {
-  for (const OrderRule r : {OrderRule::automatic, OrderRule::svc, OrderRule::gap, OrderRule::test})
+  for (const OrderRule r : kOrderRules)
     if (name == to_string(r)) return r;
   throw std::invalid_argument("unknown order rule '" + name + "' (auto, svc, gap or test)");
 }
