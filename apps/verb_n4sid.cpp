@@ -1,6 +1,7 @@
 // sysid n4sid: subspace identification (N4SID / MOESP / CVA) of a state-space
 // model from a CSV log, with validation on held-out data and an order sweep.
 #include <sysid/config.hpp>
+#include <sysid/io/csv.hpp>
 #include <sysid/core/modal_table.hpp>
 #include <sysid/io/atomic_file.hpp>
 #include <sysid/io/model_json.hpp>
@@ -35,6 +36,7 @@ struct N4sidArgs {
   std::string order_rule = to_string(N4sidOptions{}.order_rule);
   int horizon = 0;
   bool enforce_stability = false;
+  bool allow_unstable = false;
   std::string hankel = "auto";
   std::string validate;
   std::optional<double> split;
@@ -43,6 +45,7 @@ struct N4sidArgs {
   std::string decimation = "auto";
   std::string out;
   std::string plot;
+  std::string stabilization;
 };
 
 /// The singular values (and, when present, the canonical correlations of the SVC
@@ -85,6 +88,65 @@ void plot_order_choice(const N4sidArgs& a, const N4sidResult& res) {
     fig.panels.push_back(panel(res.canonical_correlations, "canonical correlations (SVC rule)", "canonical correlation", false));
   fig.height_per_row = 320;
   write_plot(fig, a.plot, "n4sid");
+}
+
+/// The stabilisation diagram as a CSV table (.csv: one row per pole) or a picture
+/// (.svg/.png: order over frequency, one symbol per stability class, the physical
+/// modes as dashed lines).
+void write_stabilization(const std::string& path, const StabilizationDiagram& d, const std::string& log_path) {
+  if (path.size() > 4 && path.compare(path.size() - 4, 4, ".csv") == 0) {
+    Eigen::MatrixXd table(static_cast<Eigen::Index>(d.poles.size()), 7);
+    for (std::size_t k = 0; k < d.poles.size(); ++k) {
+      const StabilizationPole& p = d.poles[k];
+      table.row(static_cast<Eigen::Index>(k)) << p.order, p.freq_hz, p.damping, p.stable_frequency ? 1.0 : 0.0,
+          p.stable_damping ? 1.0 : 0.0, p.stable_shape ? 1.0 : 0.0, static_cast<double>(p.mode + 1);
+    }
+    write_csv(path, {"order", "freq_hz", "damping", "stable_frequency", "stable_damping", "stable_shape", "mode"}, table);
+    return;
+  }
+  PlotPanel panel;
+  panel.title = d.criteria();
+  panel.xlabel = "frequency [Hz]";
+  panel.ylabel = "model order";
+  panel.yrange = std::pair<double, double>(d.order_lo - 0.5, d.order_hi + 0.5);
+  const std::vector<std::pair<char, std::string>> classes = {
+      {'o', "new"}, {'f', "stable frequency"}, {'d', "stable frequency and damping"}, {'v', "stable frequency and shape"},
+      {'s', d.with_shapes ? "stable in all" : "stable frequency and damping"}};
+  const int point_types[] = {1, 2, 6, 4, 7};
+  for (std::size_t c = 0; c < classes.size(); ++c) {
+    if (!d.with_shapes && classes[c].first == 'd') continue;  // one output: 'd' is 's'
+    std::vector<double> x, y;
+    for (const auto& p : d.poles)
+      if (p.mark(d.with_shapes) == classes[c].first) {
+        x.push_back(p.freq_hz);
+        y.push_back(p.order);
+      }
+    if (x.empty()) continue;
+    PlotCurve curve;
+    curve.title = classes[c].second;
+    curve.style = "points";
+    curve.point_type = point_types[c];
+    curve.point_size = classes[c].first == 's' ? 0.8 : 0.6;
+    curve.color = static_cast<int>(c);
+    curve.x = Eigen::Map<const Eigen::VectorXd>(x.data(), static_cast<Eigen::Index>(x.size()));
+    curve.y = Eigen::Map<const Eigen::VectorXd>(y.data(), static_cast<Eigen::Index>(y.size()));
+    panel.curves.push_back(std::move(curve));
+  }
+  for (std::size_t k = 0; k < d.modes.size(); ++k) {
+    PlotCurve line;
+    line.title = k == 0 ? "physical modes" : "";
+    line.dashed = true;
+    line.color = 6;
+    line.x = Eigen::VectorXd::Constant(2, d.modes[k].freq_hz);
+    line.y = (Eigen::VectorXd(2) << d.order_lo, d.order_hi).finished();
+    panel.curves.push_back(std::move(line));
+  }
+  PlotFigure fig;
+  fig.title = "stabilization diagram of " + log_path + ": " + std::to_string(d.modes.size()) + " physical modes" +
+              (d.chosen_order > 0 ? ", all present from order " + std::to_string(d.chosen_order) : std::string());
+  fig.panels.push_back(std::move(panel));
+  fig.height_per_row = 600;
+  write_plot(fig, path, "n4sid");
 }
 
 /// --order: N, auto, or A:B.
@@ -165,13 +227,16 @@ void run_n4sid(const N4sidArgs& a) {
 
   std::vector<std::string> inputs_files{a.log_path};
   if (!a.validate.empty()) inputs_files.push_back(a.validate);
-  claim_outputs({a.out, a.plot}, inputs_files);
+  claim_outputs({a.out, a.plot, a.stabilization}, inputs_files);
+  const bool diagram = !a.stabilization.empty();
+  if (diagram && !order.sweep)
+    throw CLI::ValidationError("--stabilization", "needs --order LO:HI, the orders the diagram shows (e.g. --order 2:60)");
 
   const LogOptions log_options =
       make_log_options(a.log, split_names(a.log.inputs, "--inputs"), split_names(a.log.outputs, "--outputs"));
   // Estimation and validation data.
   std::optional<double> split_fraction = a.split;
-  if (order.sweep && !split_fraction && a.validate.empty()) {
+  if (order.sweep && !diagram && !split_fraction && a.validate.empty()) {
     split_fraction = 0.7;
     note(verb, "--order A:B compares orders on validation data; none given, so using --split 0.7");
   }
@@ -196,6 +261,7 @@ void run_n4sid(const N4sidArgs& a) {
                   : a.hankel == "cholesky_double_double" ? HankelRoute::cholesky_double_double
                                                          : HankelRoute::automatic;
   options.enforce_stability = a.enforce_stability;
+  options.allow_unstable = a.allow_unstable;
   // --band-limit: the Par2 remedy for gain the data do not determine above the
   // excited band (the model comes back in series with the low-pass at its inputs).
   if (a.band_limit_hz) options.band_limit_hz = *a.band_limit_hz;
@@ -206,7 +272,28 @@ void run_n4sid(const N4sidArgs& a) {
   N4sidResult res;
   Eigen::VectorXd validation_fit;
   nlohmann::json sweep_json = nlohmann::json::array();
-  if (order.sweep) {
+  if (diagram) {
+    // Every order's poles from one compression; the diagram's rule chooses the model's order.
+    options.order = 0;
+    options.order_rule = OrderRule::stabilization;
+    options.stabilization_order_lo = order.lo;
+    options.stabilization_order_hi = order.hi;
+    res = n4sid(std::move(estimation), options);
+    const StabilizationDiagram& d = res.stabilization;
+    report << "stabilization diagram, orders " << d.order_lo << ".." << d.order_hi << " (horizon " << res.horizon << "; "
+           << d.criteria() << "):\n";
+    if (d.modes.empty())
+      report << "no physical mode: no column of stable poles\n";
+    else
+      report << "physical modes (columns of stable poles):\n" << d.modes_table();
+    report << "\n";
+    if (validation) {
+      CompareOptions co;
+      co.input_offset = res.input_offset;
+      co.output_offset = res.output_offset;
+      validation_fit = compare_fit(res.model, res.K, *validation, co);
+    }
+  } else if (order.sweep) {
     const std::vector<OrderSweepEntry> table = n4sid_order_sweep(estimation, *validation, options, order.lo, order.hi);
     const OrderSweepEntry* best = nullptr;
     for (const auto& e : table) {
@@ -279,6 +366,10 @@ void run_n4sid(const N4sidArgs& a) {
   report << "modes:\n" << format_modal_table(modal_table(res.model));
   std::cout << report.str() << std::flush;
   for (const auto& w : res.warnings) warn(verb, w);
+  if (diagram) {
+    write_stabilization(a.stabilization, res.stabilization, a.log_path);
+    note(verb, "wrote " + a.stabilization);
+  }
 
   if (a.out.empty()) {
     if (!a.plot.empty()) plot_order_choice(a, res);
@@ -305,7 +396,7 @@ void run_n4sid(const N4sidArgs& a) {
     p["validation_fit_percent"] = to_json_list(validation_fit);
     p["validation"] = validation_label;
   }
-  if (order.sweep) p["order_sweep"] = sweep_json;
+  if (order.sweep && !diagram) p["order_sweep"] = sweep_json;
   p["singular_values"] = to_json_list(res.singular_values);
   p["excited_band_hz"] = {res.excited_band_low_hz, res.excited_band_high_hz};
   p["hankel_route"] = to_string(res.route_used);
@@ -313,6 +404,7 @@ void run_n4sid(const N4sidArgs& a) {
   p["observability_condition"] = res.observability_condition;
   p["past_future_min_sine"] = res.past_future_min_sine;
   if (a.enforce_stability) p["enforce_stability"] = true;
+  if (a.allow_unstable) p["allow_unstable"] = true;
   if (a.band_limit_hz) {
     p["band_limit_hz"] = *a.band_limit_hz;
     p["band_limit_order"] = a.band_limit_order;
@@ -360,6 +452,9 @@ Verb register_n4sid(CLI::App& app) {
   cmd->add_option("--horizon", args->horizon, "block rows i of the past/future Hankel matrix (default: automatic)")
       ->check(CLI::Range(2, 100000));
   cmd->add_flag("--enforce-stability", args->enforce_stability, "estimate A so that the model is always stable");
+  cmd->add_flag("--allow-unstable", args->allow_unstable,
+                "keep an unstable estimate of A (a plant that is itself unstable); by default its unstable poles are "
+                "reflected into the unit circle, with a warning");
   cmd->add_option("--hankel", args->hankel,
                   "Hankel compression route: qr (Householder), cholesky (structured Gram matrix: fastest, squares the "
                   "condition number), cholesky_double_double (the same Gram matrix in double-double: as accurate as qr "
@@ -388,6 +483,18 @@ Verb register_n4sid(CLI::App& app) {
             return "expected auto, 1 or an odd factor >= 3, found '" + s + "'";
           },
           "auto|1|R"));
+  cmd->add_option("--stabilization", args->stabilization,
+                  "FILE (.csv, .svg or .png): the stabilisation diagram of the orders of --order LO:HI, from one "
+                  "compression: every pole marked stable in frequency (1 %), damping (5 %) and, with several outputs, "
+                  "mode shape (MAC >= 0.98) against the order below; the physical modes are printed and the model's "
+                  "order is the lowest that holds them all")
+      ->check(CLI::Validator(
+          [](std::string& s) -> std::string {
+            for (const char* ext : {".csv", ".svg", ".png"})
+              if (s.size() > 4 && s.compare(s.size() - 4, 4, ext) == 0) return {};
+            return "expected a file name ending in .csv, .svg or .png, found '" + s + "'";
+          },
+          "FILE.csv|.svg|.png"));
   cmd->add_option("--out", args->out, "model file to write (JSON, with K, offsets, x0 and provenance)");
   cmd->add_option("--plot", args->plot,
                   "plot of the singular values (and canonical correlations) that chose the order (.svg or .png; needs gnuplot)")
@@ -398,7 +505,8 @@ Verb register_n4sid(CLI::App& app) {
       "Warnings go to stderr. The model file is written at the end, atomically.\n"
       "Example:\n"
       "  sysid n4sid log.csv --inputs u --outputs y --order auto --split 0.7 --out model.json\n"
-      "  sysid n4sid log.csv --inputs u1,u2 --outputs y1,y2 --order 2:12 --validate run2.csv --out model.json");
+      "  sysid n4sid log.csv --inputs u1,u2 --outputs y1,y2 --order 2:12 --validate run2.csv --out model.json\n"
+      "  sysid n4sid modal.csv --inputs f1,f2 --outputs a1,...,a28 --order 2:60 --stabilization stab.svg --out model.json");
   return {cmd, [args] { run_n4sid(*args); }};
 }
 

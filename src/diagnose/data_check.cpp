@@ -13,6 +13,7 @@
 #include "sysid/core/median.hpp"
 #include "sysid/core/persistent_excitation.hpp"
 #include "sysid/pem/arx.hpp"
+#include "sysid/pem/prediction_error.hpp"
 #include "sysid/signal/polynomial_filter.hpp"
 #include "sysid/core/distributions.hpp"
 #include "sysid/validate/residual_analysis.hpp"
@@ -42,6 +43,102 @@ ChannelCheck channel_statistics(const std::string& name, const Eigen::VectorXd& 
   for (Eigen::Index t = 0; t < x.size(); ++t) at_extreme += (x(t) >= hi - tolerance) || (x(t) <= lo + tolerance);
   c.clipped_share = hi > lo ? static_cast<double>(at_extreme) / n : 0.0;
   return c;
+}
+
+/// The input prewhitened by its own AR(prewhitening_order) model, or empty when
+/// the filter leaves it coloured (Ljung-Box at level 1 % over feedback_lags lags):
+/// a multisine or a band-limited input, which no AR filter whitens.
+Eigen::VectorXd prewhitened_input(const IoData& data, Eigen::Index j, const DataCheckOptions& o, Eigen::VectorXd& filter) {
+  const Experiment& e = data.experiments.front();
+  const Eigen::Index N = e.samples();
+  IoData single;
+  single.Ts = data.Ts;
+  single.experiments.push_back({Eigen::MatrixXd(N, 0), e.u.col(j), e.source});
+  ArOptions aro;
+  aro.na = o.prewhitening_order;
+  try {
+    filter = ar(single, aro).models.front().A;
+  } catch (const std::exception&) {
+    return {};
+  }
+  const Eigen::VectorXd uw = filter_polynomial(filter, Eigen::VectorXd::Ones(1), e.u.col(j)).col(0).tail(N - filter.size());
+  const Eigen::Index lags = std::min<Eigen::Index>(o.feedback_lags, uw.size() - 1);
+  const Eigen::VectorXd r = sample_correlation(uw, uw, 1, lags);
+  const auto n = static_cast<double>(uw.size());
+  double q = 0.0;
+  for (Eigen::Index k = 0; k < lags; ++k) q += r(k) * r(k) / (n - static_cast<double>(k + 1));
+  q *= n * (n + 2.0);
+  return chi_square_sf(q, static_cast<double>(lags)) >= 0.01 ? uw : Eigen::VectorXd();
+}
+
+/// The feedback tests (file comment), each at half the family-wise level:
+///  - the one-step residuals eps_i of the ARX fit against the inputs' future values
+///    u_j(t + k), k = 1..feedback_lags, with Bartlett's coloured-signal variance
+///    (validate/residual_analysis.hpp): valid for any input;
+///  - where the input's own AR filter whitens it, the prewhitened input's future
+///    against the equally filtered output (the classical test, which also sees a
+///    loop whose noise is small: the controller's law itself).
+void feedback_test(const IoData& data, const LinearPolynomialResult& fit, const DataCheckOptions& o, DataCheckResult& r,
+                   std::vector<std::string>& serious) {
+  const Experiment& e = data.experiments.front();
+  const Eigen::Index N = e.samples(), m = e.u.cols(), l = e.y.cols();
+  // The first noise_model_order predictions use the zeros before the record.
+  const Eigen::Index skip = o.noise_model_order, used = N - skip;
+  const Eigen::MatrixXd u = e.u.rowwise() - fit.input_offset.transpose();
+  Eigen::MatrixXd residuals(used, l);
+  for (Eigen::Index i = 0; i < l; ++i) {
+    const Eigen::VectorXd y = e.y.col(i).array() - fit.output_offset(i);
+    residuals.col(i) = prediction_errors(fit.models[static_cast<std::size_t>(i)], u, y, false).eps.tail(used);
+  }
+  ResidualAnalysisOptions ro;
+  ro.max_lag = std::min<Eigen::Index>(o.feedback_lags, used - 1);
+  ro.confidence = o.confidence;
+  const ResidualAnalysisResult a = analyze_residuals(residuals, u.bottomRows(used), ro);
+  const Eigen::Index lags = a.max_lag;
+  r.feedback_lags = lags;
+  const double z = normal_quantile(1.0 - (1.0 - o.confidence) / (4.0 * static_cast<double>(lags * m * l)));
+  for (Eigen::Index j = 0; j < m; ++j) {
+    Eigen::VectorXd filter;
+    const Eigen::VectorXd uw = r.inputs[static_cast<std::size_t>(j)].std > 0.0 ? prewhitened_input(data, j, o, filter) : Eigen::VectorXd();
+    for (Eigen::Index i = 0; i < l; ++i) {
+      const Eigen::Index column = i * m + j;
+      FeedbackCheck f;
+      f.input = j;
+      f.output = i;
+      // Row lags - k holds r(eps_i(t - k), u_j(t)): the input k samples after the residual.
+      for (Eigen::Index k = 1; k <= lags; ++k) {
+        const double c = std::abs(a.input_correlation(lags - k, column));
+        if (c > f.largest_correlation) {
+          f.largest_correlation = c;
+          f.at_lag = k;
+        }
+      }
+      f.bound = z * a.input_correlation_bound(column) / a.z;
+      f.likely = f.largest_correlation > f.bound;
+      std::string evidence = "correlation " + format_number(f.largest_correlation, 2) +
+                             " of the input with the output's earlier innovation at lag " + std::to_string(f.at_lag) +
+                             ", bound " + format_number(f.bound, 2);
+      if (uw.size() > 0) {
+        const Eigen::VectorXd yw =
+            filter_polynomial(filter, Eigen::VectorXd::Ones(1), e.y.col(i)).col(0).tail(uw.size());
+        const Eigen::VectorXd corr = sample_correlation(uw, yw, 1, std::min<Eigen::Index>(lags, uw.size() - 1));
+        Eigen::Index at = 0;
+        f.prewhitened_correlation = corr.cwiseAbs().maxCoeff(&at);
+        f.prewhitened_bound = z / std::sqrt(static_cast<double>(uw.size()));
+        if (f.prewhitened_correlation > f.prewhitened_bound && !f.likely) {
+          f.likely = true;
+          evidence = "prewhitened correlation " + format_number(f.prewhitened_correlation, 2) + " at lag " +
+                     std::to_string(at + 1) + ", bound " + format_number(f.prewhitened_bound, 2);
+        }
+      }
+      if (f.likely)
+        serious.push_back("input " + data.input_name(j) + " depends on past values of output " + data.output_name(i) + " (" +
+                          evidence +
+                          "): likely closed-loop data; output-error and subspace methods are then biased — use a "
+                          "prediction-error model with a noise model (ARX, ARMAX) or an external reference");
+      r.feedback.push_back(f);
+    }
+  }
 }
 
 }  // namespace
@@ -85,7 +182,8 @@ DataCheckResult check_data(const IoData& data, const Eigen::VectorXd& time, cons
 
   for (auto& w : collinear_input_warnings(data, "")) serious.push_back(std::move(w));
 
-  // SNR per output from ARX(n, n) on all inputs (noise variance of each output model).
+  // SNR per output from ARX(n, n) on all inputs (noise variance of each output
+  // model); the same fit's residuals carry the feedback test.
   std::vector<double> noise_variance(static_cast<std::size_t>(l), std::numeric_limits<double>::quiet_NaN());
   if (m > 0) {
     ArxOptions ao;
@@ -95,8 +193,9 @@ DataCheckResult check_data(const IoData& data, const Eigen::VectorXd& time, cons
     try {
       const LinearPolynomialResult fit = arx(data, ao);
       for (Eigen::Index i = 0; i < l; ++i) noise_variance[static_cast<std::size_t>(i)] = fit.models[static_cast<std::size_t>(i)].noise_variance;
+      feedback_test(data, fit, o, r, serious);
     } catch (const std::exception& ex) {
-      advisory.push_back(std::string("no signal-to-noise estimate: the ARX fit failed (") + ex.what() + ")");
+      advisory.push_back(std::string("no signal-to-noise estimate and no feedback test: the ARX fit failed (") + ex.what() + ")");
     }
   }
   for (Eigen::Index i = 0; i < l; ++i) {
@@ -126,46 +225,6 @@ DataCheckResult check_data(const IoData& data, const Eigen::VectorXd& time, cons
         advisory.push_back(what + " drifts by " + format_number(c.trend_ratio, 2) +
                            " standard deviations over the record: detrend it (sysid filter --detrend linear), "
                            "or the drift is fitted as slow dynamics");
-    }
-  }
-
-  // Feedback: prewhiten each input by its own AR model, apply the same filter to
-  // the outputs, and test the correlation of future inputs with present outputs.
-  const double z = normal_quantile(1.0 - (1.0 - o.confidence) / (2.0 * static_cast<double>(o.feedback_lags * std::max<Eigen::Index>(1, m * l))));
-  for (Eigen::Index j = 0; j < m; ++j) {
-    if (r.inputs[static_cast<std::size_t>(j)].std == 0.0) continue;
-    IoData single;
-    single.Ts = data.Ts;
-    single.experiments.push_back({Eigen::MatrixXd(N, 0), e.u.col(j), e.source});
-    ArOptions aro;
-    aro.na = o.prewhitening_order;
-    Eigen::VectorXd whitening;
-    try {
-      whitening = ar(single, aro).models.front().A;
-    } catch (const std::exception&) {
-      whitening = Eigen::VectorXd::Ones(1);
-    }
-    const Eigen::VectorXd uw = filter_polynomial(whitening, Eigen::VectorXd::Ones(1), e.u.col(j));
-    for (Eigen::Index i = 0; i < l; ++i) {
-      FeedbackCheck f;
-      f.input = j;
-      f.output = i;
-      const Eigen::VectorXd yw = filter_polynomial(whitening, Eigen::VectorXd::Ones(1), e.y.col(i));
-      const Eigen::Index skip = whitening.size();  // filter start-up
-      const Eigen::VectorXd corr =
-          sample_correlation(uw.tail(N - skip), yw.tail(N - skip), 1, std::min<Eigen::Index>(o.feedback_lags, N - skip - 1));
-      Eigen::Index at = 0;
-      f.largest_correlation = corr.cwiseAbs().maxCoeff(&at);
-      f.at_lag = at + 1;
-      f.bound = z / std::sqrt(static_cast<double>(N - skip));
-      f.likely = f.largest_correlation > f.bound;
-      if (f.likely)
-        serious.push_back("input " + data.input_name(j) + " depends on past values of output " + data.output_name(i) +
-                          " (prewhitened correlation " + format_number(f.largest_correlation, 2) + " at lag " +
-                          std::to_string(f.at_lag) + ", bound " + format_number(f.bound, 2) +
-                          "): likely closed-loop data; output-error and subspace methods are then biased — use a "
-                          "prediction-error model with a noise model (ARX, ARMAX) or an external reference");
-      r.feedback.push_back(f);
     }
   }
 
@@ -211,7 +270,7 @@ std::string DataCheckResult::report() const {
       << (std::isfinite(c.snr_db) ? format_number(c.snr_db, 3) + " dB (upper estimate)" : std::string("n/a")) << ", trend "
       << format_number(c.trend_ratio, 2) << " std, at extremes " << format_number(100.0 * c.clipped_share, 2) << " %\n";
   if (!feedback.empty()) {
-    s << "feedback test (prewhitened input vs past output, lags 1..):\n";
+    s << "feedback test (input vs the output's earlier innovation, lags 1.." << feedback_lags << "):\n";
     for (const auto& f : feedback)
       s << "  " << (f.input < static_cast<Eigen::Index>(inputs.size()) ? inputs[static_cast<std::size_t>(f.input)].name : "?")
         << " <- past " << (f.output < static_cast<Eigen::Index>(outputs.size()) ? outputs[static_cast<std::size_t>(f.output)].name : "?")

@@ -23,7 +23,10 @@
 #include <sysid/validate/fit.hpp>
 
 #include <cmath>
+#include <complex>
 #include <iomanip>
+#include <limits>
+#include <numbers>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -155,6 +158,8 @@ struct SubspaceCore {
   double gram_condition_estimate = 0, observability_condition = 0, past_future_min_sine = 1;
   int oblique_dropped_directions = 0;
   std::vector<std::string> warnings;
+  StabilizationDiagram stabilization;
+  std::string horizon_rule;
 };
 
 /// What the automatic order choice searches and the dimensions of its statistics.
@@ -198,6 +203,8 @@ inline OrderChoice choose_subspace_order(const SubspaceCore& res, OrderRule rule
     }
     case OrderRule::svc: return choose_order_by_svc(cc, s.top, s.columns, s.outputs, s.inputs);
     case OrderRule::automatic: break;
+    case OrderRule::stabilization:
+      throw std::invalid_argument("n4sid: the stabilization order rule reads the diagram, not the singular values");
   }
   OrderChoice svc = choose_order_by_svc(cc, s.top, s.columns, s.outputs, s.inputs);
   if (!s.test_possible()) return svc;
@@ -250,10 +257,9 @@ inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& option
   int horizon = options.horizon;
   if (horizon == 0) {
     horizon = automatic_horizon(options.order, options.max_order, l);
-    // Keep at least ~4 Hankel columns per row so the projections are well determined.
-    Eigen::Index shortest = data.experiments.front().samples();
-    for (const auto& e : data.experiments) shortest = std::min(shortest, e.samples());
-    while (horizon > 2 && (2 * horizon > shortest || 4 * 2 * horizon * (m + l) > data.total_samples())) --horizon;
+    if (options.stabilization_order_hi > 0 || options.order_rule == OrderRule::stabilization)
+      horizon = std::max({horizon, automatic_horizon(0, options.stabilization_order_hi, l), kStabilizationMinHorizon});
+    horizon = record_limited_horizon(horizon, data);
   }
   if (horizon < 2) throw std::invalid_argument("n4sid: need horizon >= 2");
   // A user-given order must fit under the horizon; an automatic choice is capped by it.
@@ -312,12 +318,57 @@ inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& option
     });
   }
   res.singular_values = svd.singularValues();
+  int top = static_cast<int>(i * l) - 1;
+  if (options.max_order > 0) top = std::min(top, options.max_order);
+  // Step 4 for order n: Gamma_i (first n left singular vectors, scaled), its
+  // first block row C and A from its shift equation.
+  const auto supported = [&](Eigen::Index n) {
+    return n >= 1 && n < res.singular_values.size() && res.singular_values(n - 1) > tol * res.singular_values(0);
+  };
+  const auto observability = [&](Eigen::Index n) {
+    const Eigen::VectorXd s1_root = res.singular_values.head(n).cwiseSqrt();
+    Eigen::MatrixXd gamma = svd.matrixU().leftCols(n) * s1_root.asDiagonal();
+    if (options.weighting == SubspaceWeighting::cva) gamma = w1_inv * gamma;
+    return gamma;
+  };
+  const auto shift_solution = [&](const Eigen::MatrixXd& gamma) -> Eigen::MatrixXd {
+    if (options.enforce_stability) {
+      Eigen::MatrixXd shifted = Eigen::MatrixXd::Zero(i * l, gamma.cols());
+      shifted.topRows((i - 1) * l) = gamma.bottomRows((i - 1) * l);
+      return gamma.completeOrthogonalDecomposition().solve(shifted);
+    }
+    return gamma.topRows((i - 1) * l).completeOrthogonalDecomposition().solve(gamma.bottomRows((i - 1) * l));
+  };
+  // The stabilisation diagram: every order's poles from this one SVD.
+  if (options.stabilization_order_hi > 0 || (options.order == 0 && options.order_rule == OrderRule::stabilization)) {
+    const int lo = std::max(1, options.stabilization_order_lo);
+    int hi = options.stabilization_order_hi > 0 ? options.stabilization_order_hi : top;
+    if (hi > static_cast<int>(i * l) - 1)
+      throw std::invalid_argument("n4sid: the stabilization diagram's highest order " + std::to_string(hi) +
+                                  " needs horizon * outputs > " + std::to_string(hi) + " (horizon " + std::to_string(i) +
+                                  "); increase --horizon");
+    while (hi > lo && !supported(hi)) --hi;
+    std::vector<OrderPoles> orders;
+    for (int n = lo; n <= hi; ++n) {
+      const Eigen::MatrixXd gamma = observability(n);
+      Eigen::EigenSolver<Eigen::MatrixXd> eig(shift_solution(gamma));
+      OrderPoles op;
+      op.order = n;
+      op.poles = eig.eigenvalues();
+      op.shapes = gamma.topRows(l).cast<std::complex<double>>() * eig.eigenvectors();
+      orders.push_back(std::move(op));
+    }
+    res.stabilization = stabilization_diagram(orders, data.Ts, options.stabilization);
+  }
   if (options.order > 0) {
     res.order = options.order;
     res.order_rule = "given by the user";
+  } else if (options.order_rule == OrderRule::stabilization) {
+    if (res.stabilization.chosen_order < 1)
+      throw NumericalError("n4sid: " + res.stabilization.rule + "; choose another --order-rule or give --order N");
+    res.order = res.stabilization.chosen_order;
+    res.order_rule = res.stabilization.rule;
   } else {
-    int top = static_cast<int>(i * l) - 1;
-    if (options.max_order > 0) top = std::min(top, options.max_order);
     // The correlations are those left after projecting out the future inputs:
     // that regression uses uf.rows() of the columns' degrees of freedom.
     const OrderSearch search{top, hc.columns, hc.columns - uf.rows(), yf.rows(), wp.rows() - oi.dropped_directions, l, m, tol};
@@ -327,14 +378,11 @@ inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& option
     if (res.order < 1) select_order_when_svc_finds_none(res, search);
   }
   const Eigen::Index n = res.order;
-  if (n >= res.singular_values.size() || res.singular_values(n - 1) <= tol * res.singular_values(0))
+  if (!supported(n))
     throw NumericalError("n4sid: order " + std::to_string(n) +
                          " exceeds the rank of the projection (the data do not support it); choose a lower order");
 
-  // Step 4: Gamma_i, C, A.
-  const Eigen::VectorXd s1_root = res.singular_values.head(n).cwiseSqrt();
-  Eigen::MatrixXd gamma = svd.matrixU().leftCols(n) * s1_root.asDiagonal();
-  if (options.weighting == SubspaceWeighting::cva) gamma = w1_inv * gamma;
+  const Eigen::MatrixXd gamma = observability(n);
   {
     Eigen::JacobiSVD<Eigen::MatrixXd> gs(gamma);
     const auto& g = gs.singularValues();
@@ -342,14 +390,7 @@ inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& option
   }
   const Eigen::MatrixXd C = gamma.topRows(l);
   const Eigen::MatrixXd gamma_up = gamma.topRows((i - 1) * l);
-  Eigen::MatrixXd A;
-  if (options.enforce_stability) {
-    Eigen::MatrixXd shifted = Eigen::MatrixXd::Zero(i * l, n);
-    shifted.topRows((i - 1) * l) = gamma.bottomRows((i - 1) * l);
-    A = gamma.completeOrthogonalDecomposition().solve(shifted);
-  } else {
-    A = gamma_up.completeOrthogonalDecomposition().solve(gamma.bottomRows((i - 1) * l));
-  }
+  const Eigen::MatrixXd A = shift_solution(gamma);
 
   // Step 5: states, B and D from the projections, noise covariances, Kalman gain.
   const auto gamma_cod = gamma.completeOrthogonalDecomposition();
@@ -385,27 +426,95 @@ inline int decimation_factor(double fs, double f_high, int requested) {
   return r >= 3 ? r : 1;
 }
 
-/// Principal real r-th root of A (r odd): the discrete poles at the original
-/// rate, z = z_d^(1/r) for complex poles (same continuous-time s = log(z)/Ts),
-/// the real root for real poles. Via the eigendecomposition; NumericalError if
-/// A is defective (eigenvector matrix ill-conditioned).
-inline Eigen::MatrixXd principal_root(const Eigen::MatrixXd& a, int r) {
+/// The slowest-mode rule of N4sidOptions::horizon: the horizon whose past and
+/// future windows (2 i samples at sample time Ts) span one period of the slowest
+/// oscillatory mode of A (|damping| <= 0.3, stable or not: an unstable estimate
+/// is often a slow mode the horizon could not see), within the record and
+/// kSlowestModeMaxHankelRows; 0 when A has no such mode. `slowest_hz` gets its frequency.
+inline int horizon_for_slowest_mode(const Eigen::MatrixXd& a, const IoData& data, double& slowest_hz) {
+  slowest_hz = 0.0;
+  if (a.size() == 0) return 0;
+  const Eigen::VectorXcd z = a.eigenvalues();
+  for (const auto p : z) {
+    if (!(p.imag() > 0.0)) continue;
+    const std::complex<double> s = std::log(p) / data.Ts;
+    if (std::abs(s.real()) > 0.3 * std::abs(s)) continue;
+    const double f = std::abs(s) / (2.0 * std::numbers::pi);
+    if (slowest_hz == 0.0 || f < slowest_hz) slowest_hz = f;
+  }
+  if (slowest_hz == 0.0) return 0;
+  const int wanted = static_cast<int>(std::ceil(0.5 / (slowest_hz * data.Ts)));
+  const auto channels = static_cast<int>(data.inputs() + data.outputs());
+  return record_limited_horizon(std::min(wanted, kSlowestModeMaxHankelRows / (2 * channels)), data);
+}
+
+/// Mean simulation fit (%) over the outputs of (A, C) with B, D and x0 fitted by
+/// least squares on the simulation error (step 6), on the scaled data; -infinity
+/// when the simulation diverges.
+inline double mean_simulation_fit(const Eigen::MatrixXd& a, const Eigen::MatrixXd& c, const IoData& data,
+                                  Eigen::Index bdx_max_samples) {
+  constexpr double diverged = -std::numeric_limits<double>::infinity();
+  BdxLeastSquaresOptions bo;
+  bo.max_samples = bdx_max_samples;
+  FitAccumulator fit(data.outputs());
+  try {
+    const BdxLeastSquaresResult bdx = bdx_least_squares(a, c, data, bo);
+    const StateSpace model(a, bdx.B, c, bdx.D, data.Ts);
+    for (std::size_t e = 0; e < data.experiments.size(); ++e) {
+      const Experiment& ex = data.experiments[e];
+      simulate_blockwise_modal(model, ex.u, bdx.x0[e], [&](Eigen::Index k0, const Eigen::Ref<Eigen::MatrixXd>& yb) {
+        const auto y = ex.y.middleRows(k0, yb.rows());
+        fit.add_residual(y, y - yb);
+      });
+    }
+  } catch (const std::exception&) {
+    return diverged;  // a regression or a simulation that breaks down has diverged
+  }
+  const Eigen::VectorXd f = fit.fit_percent();
+  return f.allFinite() ? f.mean() : diverged;
+}
+
+/// V f(Lambda) V^-1 for a diagonalisable real A and a map f of its eigenvalues
+/// that keeps conjugate pairs conjugate (so the result is real). NumericalError
+/// naming `remedy` if A is defective (eigenvector matrix ill-conditioned).
+template <class EigenvalueMap>
+Eigen::MatrixXd map_eigenvalues(const Eigen::MatrixXd& a, EigenvalueMap f, const std::string& remedy) {
   Eigen::EigenSolver<Eigen::MatrixXd> eig(a);
   const Eigen::MatrixXcd v = eig.eigenvectors();
   Eigen::VectorXcd lambda = eig.eigenvalues();
   Eigen::JacobiSVD<Eigen::MatrixXcd> vs(v);
   const auto& sv = vs.singularValues();
-  if (!(sv(sv.size() - 1) > 1e-10 * sv(0)))
-    throw NumericalError("n4sid: the decimated model has a defective A; rerun with --decimation 1");
-  for (Eigen::Index k = 0; k < lambda.size(); ++k) {
-    const std::complex<double> z = lambda(k);
-    if (std::abs(z.imag()) <= 1e-14 * std::abs(z))
-      lambda(k) = std::copysign(std::pow(std::abs(z.real()), 1.0 / r), z.real());
-    else
-      lambda(k) = std::pow(z, 1.0 / r);  // principal branch, conjugates stay conjugate
-  }
-  const Eigen::MatrixXcd root = v * lambda.asDiagonal() * v.inverse();
-  return root.real();
+  if (!(sv(sv.size() - 1) > 1e-10 * sv(0))) throw NumericalError("n4sid: the identified A is defective; " + remedy);
+  for (Eigen::Index k = 0; k < lambda.size(); ++k) lambda(k) = f(lambda(k));
+  const Eigen::MatrixXcd mapped = v * lambda.asDiagonal() * v.inverse();
+  return mapped.real();
+}
+
+/// Principal real r-th root of A (r odd): the discrete poles at the original
+/// rate, z = z_d^(1/r) for complex poles (same continuous-time s = log(z)/Ts),
+/// the real root for real poles.
+inline Eigen::MatrixXd principal_root(const Eigen::MatrixXd& a, int r) {
+  return map_eigenvalues(
+      a,
+      [r](std::complex<double> z) {
+        if (std::abs(z.imag()) <= 1e-14 * std::abs(z)) return std::complex<double>(std::copysign(std::pow(std::abs(z.real()), 1.0 / r), z.real()));
+        return std::pow(z, 1.0 / r);  // principal branch, conjugates stay conjugate
+      },
+      "the decimated model cannot be mapped back: rerun with --decimation 1");
+}
+
+/// A with every pole on or outside the unit circle reflected to 1 / conj(z):
+/// the same frequency, the mirrored damping (continuous s = log z / Ts goes to
+/// -conj(s)). A pole exactly on the circle moves in to 1 - 1e-6 of it.
+inline Eigen::MatrixXd reflect_unstable_poles(const Eigen::MatrixXd& a) {
+  return map_eigenvalues(
+      a,
+      [](std::complex<double> z) {
+        const double r = std::abs(z);
+        if (r < 1.0) return z;
+        return z / (r * std::max(r, 1.0 + 1e-6));
+      },
+      "pass --allow-unstable to keep the unstable estimate, or --enforce-stability");
 }
 
 }  // namespace detail
@@ -476,7 +585,9 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
   // order is then identified at the horizon sized for it (unless the user fixed one).
   auto identify = [&options](const IoData& d, bool low_passed) {
     detail::SubspaceCore c = detail::subspace_core(d, options, low_passed);
-    if (options.order == 0 && options.horizon == 0 &&
+    // With a stabilisation diagram the model comes from the diagram's compression.
+    const bool diagram = options.stabilization_order_hi > 0 || options.order_rule == OrderRule::stabilization;
+    if (options.order == 0 && options.horizon == 0 && !diagram &&
         detail::automatic_horizon(c.order, options.max_order, d.outputs()) != c.horizon) {
       N4sidOptions second = options;
       second.order = c.order;
@@ -486,6 +597,27 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
       fixed.canonical_correlations = c.canonical_correlations;
       fixed.order_warning = c.order_warning;
       c = std::move(fixed);
+    }
+    if (options.horizon > 0) {
+      c.horizon_rule = "given by the user";
+      return c;
+    }
+    c.horizon_rule = "automatic";
+    if (diagram) return c;
+    double slowest_hz = 0.0;
+    const int spanning = detail::horizon_for_slowest_mode(c.A, d, slowest_hz);
+    if (spanning > c.horizon) {
+      N4sidOptions longer = options;
+      longer.order = c.order;
+      longer.horizon = spanning;
+      detail::SubspaceCore spanned = detail::subspace_core(d, longer, low_passed);
+      spanned.order_rule = c.order_rule;
+      spanned.singular_values = c.singular_values;
+      spanned.canonical_correlations = c.canonical_correlations;
+      spanned.order_warning = c.order_warning;
+      spanned.horizon_rule = "past and future span a period of the slowest mode, " + format_number(slowest_hz, 4) +
+                             " Hz, seen at horizon " + std::to_string(c.horizon);
+      c = std::move(spanned);
     }
     return c;
   };
@@ -499,10 +631,47 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
   } else {
     core = identify(data, false);
   }
+  // An unstable A from a stable plant's data is an estimation artefact (a
+  // horizon or an order the data do not support): its poles are reflected into
+  // the unit circle and B, D, x0 fitted to the reflected A below, unless the user
+  // keeps it (a plant that is itself unstable) or asked for the stable shift.
+  // Which of the two the data are: a growing record is fitted by the unstable
+  // model only (the reflected one cannot follow the growth: tens of fit points
+  // apart), while from a stationary record the two fit alike or the unstable
+  // model's simulation diverges. So the unstable estimate is kept only when it
+  // fits the estimation data by kUnstableFitMargin points better.
+  if (!options.allow_unstable && !options.enforce_stability && core.A.size() > 0) {
+    const double radius = core.A.eigenvalues().cwiseAbs().maxCoeff();
+    if (radius >= 1.0) {
+      const Eigen::MatrixXd reflected = detail::reflect_unstable_poles(core.A);
+      const double fit_unstable = detail::mean_simulation_fit(core.A, core.C, data, options.bdx_max_samples);
+      const double fit_reflected = detail::mean_simulation_fit(reflected, core.C, data, options.bdx_max_samples);
+      constexpr double kUnstableFitMargin = 5.0;
+      if (!(fit_unstable > fit_reflected + kUnstableFitMargin)) {
+        core.A = reflected;
+        res.reflected_spectral_radius = radius;
+        res.warnings.push_back(
+            "n4sid: the least-squares A was unstable (spectral radius " + format_number(radius, 6) +
+            "): its unstable poles were reflected into the unit circle (z -> 1/conj(z): the same frequency, the damping's "
+            "sign mirrored) and B, D, x0 fitted to the reflected A (estimation fit " +
+            (std::isfinite(fit_unstable) ? format_number(fit_unstable, 4) + " %" : std::string("diverging")) + " -> " +
+            format_number(fit_reflected, 4) + " %). From a stable plant's data this is a horizon or an order the data "
+            "do not support: compare --horizon values or --order LO:HI on held-out data; --allow-unstable keeps the "
+            "unstable estimate");
+      } else {
+        res.warnings.push_back("n4sid: the unstable estimate (spectral radius " + format_number(radius, 6) +
+                               ") is kept: it fits the estimation data better than with its poles reflected (" +
+                               format_number(fit_unstable, 4) + " % against " + format_number(fit_reflected, 4) +
+                               " %): the record grows as an unstable plant's does");
+      }
+    }
+  }
   res.singular_values = core.singular_values;
   res.canonical_correlations = core.canonical_correlations;
+  res.stabilization = std::move(core.stabilization);
   res.order = core.order;
   res.horizon = core.horizon;
+  res.horizon_rule = core.horizon_rule;
   res.order_rule = core.order_rule;
   res.route_used = core.route_used;
   res.gram_condition_estimate = core.gram_condition_estimate;
@@ -613,7 +782,8 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
   };
   // Stability and band checks.
   auto check_model = [&] {
-    model_warnings = unstable_model_warnings(res.model, "n4sid", "enforce_stability (--enforce-stability) forces a stable A");
+    model_warnings = unstable_model_warnings(res.model, "n4sid",
+                                             "kept by --allow-unstable; --enforce-stability forces a stable A");
     const double lo = band_lo, hi = band_hi;
     if (hi < 0.8 * nyquist) {
       const double in_band = detail::peak_gain(res.model, std::max(lo, 0.0), hi, 200);

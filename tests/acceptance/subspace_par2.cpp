@@ -7,7 +7,11 @@
 
 #include <gtest/gtest.h>
 
+#include <iostream>
+#include <vector>
+
 #include "par2_reference.hpp"
+#include "sanitizers.hpp"
 
 namespace test_acceptance_subspace_par2 {
 
@@ -74,6 +78,32 @@ TEST_P(Par2Acceptance, DoubleDoubleGramRouteGivesTheQrRouteModel) {
   const double fit_dd = par2_in_band_fit(automatic.model, automatic.input_offset, automatic.output_offset, ref.validation);
   const double fit_qr = par2_in_band_fit(qr.model, qr.input_offset, qr.output_offset, ref.validation);
   EXPECT_NEAR(fit_dd, fit_qr, 0.05);
+}
+
+// Issue 34 item 3: no horizon from 15 to 60 writes an unstable model any more
+// (an unstable least-squares A has its poles reflected into the unit circle when
+// that fits the record better, n4sid.hpp). The in-band validation fit is printed:
+// the issue asks for every horizon within 2 points of the true model's (99.7),
+// which is not reached yet — 2026-11-29, clang 14 -O2: n4sid 91.9-98.8, MOESP
+// 82.4-99.0, CVA 81.0-99.0 over these horizons (see the issue's note).
+TEST_P(Par2Acceptance, EveryHorizonFromFifteenToSixtyGivesAStableModel) {
+  const auto& ref = par2_reference();
+  const std::vector<int> horizons = test::kSanitized ? std::vector<int>{15, 60} : std::vector<int>{15, 20, 25, 30, 40, 50, 60};
+  for (const int horizon : horizons) {
+    N4sidOptions opt;
+    opt.weighting = GetParam();
+    opt.order = 10;
+    opt.horizon = horizon;
+    const N4sidResult r = n4sid(ref.estimation, opt);
+    const double radius = r.model.A.eigenvalues().cwiseAbs().maxCoeff();
+    const double fit = par2_in_band_fit(r.model, r.input_offset, r.output_offset, ref.validation);
+    std::cout << to_string(GetParam()) << " horizon " << horizon << ": spectral radius " << radius << ", in-band validation fit "
+              << fit << " (true model " << ref.true_fit << ")" << (r.reflected_spectral_radius > 0 ? ", poles reflected" : "")
+              << "\n";
+    EXPECT_LT(radius, 1.0) << "horizon " << horizon;
+    EXPECT_EQ(r.horizon, horizon);
+    EXPECT_EQ(r.horizon_rule, "given by the user");
+  }
 }
 
 // The N4SID weighting (W1 = W2 = I) uses the oblique projection itself; on this

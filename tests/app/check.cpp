@@ -29,6 +29,17 @@ TEST(CheckApp, Par2ChirpLogReportsEveryPart) {
   EXPECT_TRUE(contains(r.out, "findings: none")) << r.out;
 }
 
+TEST(CheckApp, OpenLoopEightByEightMultisineLogHasNoClosedLoopWarning) {
+  // Eight independent random-phase multisines (2-450 Hz at 1024 Hz) into the 8x8
+  // isolator-like structure: 64 pairs, 25 lags each, all open loop.
+  const CliResult r = run_cli({"check", kData + "avi8x8.csv", "--inputs", "u1,u2,u3,u4,u5,u6,u7,u8", "--outputs",
+                               "y1,y2,y3,y4,y5,y6,y7,y8"});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_TRUE(contains(r.out, "feedback test")) << r.out;
+  EXPECT_FALSE(contains(r.out, "LIKELY FEEDBACK")) << r.out;
+  EXPECT_FALSE(contains(r.out, "closed-loop")) << r.out;
+}
+
 /// A 7 Hz sine log at 1 kHz, 6 000 samples; with `gap`, ten samples lost in the middle.
 void write_sine_log(const std::string& path, bool gap) {
   std::ofstream f(path);

@@ -2,6 +2,7 @@
 // known 4th-order plant (modes 50 Hz / zeta 0.02 and 120 Hz / zeta 0.05, 1 kHz),
 // with 1 % output noise added here.
 #include <sysid/core/modal_table.hpp>
+#include <sysid/io/csv.hpp>
 #include <sysid/io/model_json.hpp>
 
 #include <gtest/gtest.h>
@@ -243,6 +244,41 @@ TEST_F(N4sidApp, HelpHasAnExample) {
   for (const char* option : {"--inputs", "--outputs", "--ts", "--nan-policy", "--method", "--order", "--max-order",
                              "--order-rule", "--horizon", "--enforce-stability", "--hankel", "--validate", "--split", "--band-limit", "--out"})
     EXPECT_NE(r.out.find(option), std::string::npos) << option;
+}
+
+TEST_F(N4sidApp, StabilizationDiagramChoosesTheOrderAndWritesItsPoles) {
+  // The two modes (50 and 120 Hz) stand as columns over orders 2..24; the lowest
+  // order that holds both is 4, and the CSV lists every plotted pole with its marks.
+  const std::string model = path("stab.json"), table = path("stab.csv");
+  const CliResult r = run_cli({"n4sid", path("log.csv"), "--inputs", "u", "--outputs", "y", "--order", "2:24",
+                               "--stabilization", table, "--out", model});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_NE(r.out.find("stabilization diagram, orders 2..24"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("physical modes (columns of stable poles)"), std::string::npos) << r.out;
+  EXPECT_EQ(printed_order(r.out), 4) << r.out;
+  const ModelFile f = read_model_json(model);
+  const std::vector<Mode> modes = modal_table(f.model);
+  ASSERT_EQ(modes.size(), 2u);
+  EXPECT_NEAR(modes[0].freq_hz, 50.0, 0.5);
+  EXPECT_NEAR(modes[1].freq_hz, 120.0, 1.0);
+  const CsvTable t = read_csv(table);
+  for (const char* c : {"order", "freq_hz", "damping", "stable_frequency", "stable_damping", "stable_shape", "mode"})
+    EXPECT_NO_THROW(t.column(c)) << c;
+  int in_modes = 0;
+  for (Eigen::Index k = 0; k < t.values.rows(); ++k) {
+    EXPECT_GE(t.values(k, t.column("order")), 2);
+    EXPECT_LE(t.values(k, t.column("order")), 24);
+    in_modes += t.values(k, t.column("mode")) > 0;
+  }
+  EXPECT_GE(in_modes, 2 * 10);  // both columns stable over most orders
+
+  // The diagram shows a range of orders: a single order is a usage error, nothing written.
+  const std::string bad = path("stab_bad.csv");
+  const CliResult single = run_cli({"n4sid", path("log.csv"), "--inputs", "u", "--outputs", "y", "--order", "4",
+                                    "--stabilization", bad});
+  EXPECT_EQ(single.exit_code, 1) << describe(single);
+  EXPECT_NE(single.err.find("--order LO:HI"), std::string::npos) << single.err;
+  EXPECT_FALSE(std::filesystem::exists(bad));
 }
 
 TEST_F(N4sidApp, SplitAndValidateTogetherAreAUsageError) {

@@ -100,6 +100,12 @@ TEST(PlotApp, EveryPlotKindIsAValidSvgOrPng) {
   ASSERT_EQ(r.exit_code, 0) << describe(r);
   expect_valid_svg(dir / "sv.svg");
 
+  r = run_cli({"n4sid", dir / "log.csv", "--inputs", "u", "--outputs", "y", "--order", "2:16", "--stabilization",
+               dir / "stab.svg"});
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  expect_valid_svg(dir / "stab.svg");
+  EXPECT_NE(read_text_file(dir / "stab.svg").find("physical modes"), std::string::npos);
+
   r = run_cli({"hsv", dir / "m.json", "--plot", dir / "hsv.svg"});
   ASSERT_EQ(r.exit_code, 0) << describe(r);
   expect_valid_svg(dir / "hsv.svg");

@@ -1,6 +1,7 @@
 // Tests for sysid::check_data (include/sysid/diagnose/data_check.hpp).
 #include <sysid/core/discretize.hpp>
 #include <sysid/core/simulate.hpp>
+#include <sysid/signal/excitation.hpp>
 #include <sysid/signal/polynomial_filter.hpp>
 #include <sysid/diagnose/data_check.hpp>
 
@@ -138,6 +139,93 @@ TEST(DataCheck, FeedbackIsFoundInClosedLoopAndNotInOpenLoopWithAColouredInput) {
   const VectorXd coloured = sysid::filter_polynomial(VectorXd::Ones(1), (VectorXd(3) << 1.0, -1.6, 0.7).finished(), white(kN, 11));
   r = sysid::check_data(log_of(coloured, respond(coloured, 0.05, 12)));
   EXPECT_FALSE(r.feedback[0].likely) << r.report();
+}
+
+/// Two inputs, two outputs: the 40 Hz oscillator on each output, fed by both
+/// inputs with different gains (every output sees every input).
+sysid::IoData two_by_two(const MatrixXd& u, double noise_std, std::uint64_t seed) {
+  MatrixXd y(u.rows(), 2);
+  y.col(0) = sysid::simulate(plant(), MatrixXd(u.col(0) + 0.5 * u.col(1))).col(0);
+  y.col(1) = sysid::simulate(plant(), MatrixXd(0.3 * u.col(0) - u.col(1))).col(0);
+  for (Eigen::Index i = 0; i < 2; ++i) {
+    const double s = std::sqrt((y.col(i).array() - y.col(i).mean()).square().mean());
+    y.col(i) += noise_std * s * white(u.rows(), seed + static_cast<std::uint64_t>(i));
+  }
+  sysid::IoData d;
+  d.Ts = kTs;
+  d.input_names = {"u1", "u2"};
+  d.output_names = {"y1", "y2"};
+  d.experiments.push_back({u, y, "test"});
+  return d;
+}
+
+TEST(DataCheck, NoFeedbackWarningOnOpenLoopMultisinesAndTheLevelIsFamilyWise) {
+  // Independent random-phase multisines with a sharp band edge below Nyquist
+  // (no power above 450 of 500 Hz): no AR prewhitening filter whitens them, and the
+  // earlier prewhitened test called such open-loop logs closed-loop. One period and
+  // eight periods of the same signal.
+  for (const Eigen::Index period : {kN, kN / 8}) {
+    sysid::MultisineOptions ms;
+    ms.fs_hz = 1.0 / kTs;
+    ms.f_min_hz = 2.0;
+    ms.f_max_hz = 450.0;
+    ms.samples = kN;
+    ms.period = period;
+    ms.inputs = 2;
+    ms.seed = 21;
+    const auto r = sysid::check_data(two_by_two(sysid::multisine(ms), 0.05, 22));
+    ASSERT_EQ(r.feedback.size(), 4u);
+    EXPECT_FALSE(any_finding(r, "closed-loop")) << "period " << period << "\n" << r.report();
+  }
+  // The stated level holds for the whole log, not per pair and lag: over 40 open-loop
+  // logs (two white or low-pass inputs, four pairs, 25 lags each) at 1 %, expect 0.4
+  // logs with a warning; 3 or more has probability 0.8 % (binomial, p = 0.01).
+  int warned = 0;
+  for (std::uint64_t k = 0; k < 40; ++k) {
+    MatrixXd u(kN, 2);
+    u.col(0) = white(kN, 100 + 3 * k);
+    u.col(1) = sysid::filter_polynomial(VectorXd::Ones(1), (VectorXd(3) << 1.0, -1.6, 0.7).finished(), white(kN, 101 + 3 * k));
+    warned += any_finding(sysid::check_data(two_by_two(u, 0.1, 102 + 3 * k)), "closed-loop") ? 1 : 0;
+  }
+  EXPECT_LE(warned, 2);
+}
+
+TEST(DataCheck, FeedbackIsFoundInAPositionLoopWithEncoderQuantisation) {
+  // A PD position loop around the plant: the logged input is the controller's
+  // output computed from the quantised measured position (steps of 1/200 of its
+  // standard deviation) of the previous sample (a digital controller's
+  // computation delay), plus a white reference; a force disturbance (30 % of the reference) acts on
+  // the plant, so the loop carries noise back into the input, which is what
+  // biases output-error and subspace methods (a loop without any noise would
+  // not: nothing then correlates the input with the output's innovation). Two
+  // inputs and outputs so the Bonferroni level covers several pairs.
+  const sysid::StateSpace g = plant();
+  const VectorXd ref1 = white(kN, 31), ref2 = white(kN, 32), force1 = 0.3 * white(kN, 33), force2 = 0.3 * white(kN, 34);
+  MatrixXd u(kN, 2), y(kN, 2);
+  Eigen::VectorXd x1 = Eigen::VectorXd::Zero(2), x2 = Eigen::VectorXd::Zero(2);
+  double previous1 = 0.0, before1 = 0.0;
+  constexpr double kQuantum = 0.005;
+  for (Eigen::Index t = 0; t < kN; ++t) {
+    const double measured1 = kQuantum * std::round((g.C * x1)(0) / kQuantum);
+    u(t, 0) = ref1(t) - 0.1 * previous1 - 0.05 * (previous1 - before1);
+    u(t, 1) = ref2(t);  // the second axis runs open loop
+    before1 = previous1;
+    previous1 = measured1;
+    y(t, 0) = measured1;
+    y(t, 1) = (g.C * x2)(0);
+    x1 = g.A * x1 + g.B * (u(t, 0) + force1(t));
+    x2 = g.A * x2 + g.B * (u(t, 1) + force2(t));
+  }
+  sysid::IoData d;
+  d.Ts = kTs;
+  d.input_names = {"u1", "u2"};
+  d.output_names = {"y1", "y2"};
+  d.experiments.push_back({u, y, "test"});
+  const auto r = sysid::check_data(d);
+  ASSERT_EQ(r.feedback.size(), 4u);
+  EXPECT_TRUE(r.feedback[0].likely) << r.report();  // u1 <- y1
+  EXPECT_FALSE(r.feedback[3].likely) << r.report();  // u2 <- y2: open loop
+  EXPECT_TRUE(any_finding(r, "closed-loop")) << r.report();
 }
 
 TEST(DataCheck, TimeColumnGapsAndJitter) {

@@ -55,6 +55,7 @@
 #include <sysid/core/state_space.hpp>
 #include <sysid/hankel/block_hankel.hpp>
 #include <sysid/subspace/order_selection.hpp>
+#include <sysid/subspace/stabilization_diagram.hpp>
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -89,11 +90,26 @@ struct N4sidOptions {
   /// order n, i = max(10, 2 ceil(n / l)); for the automatic order choice
   /// i = max(10, ceil(1.5 M / l)) with M = max_order, or 20 when max_order is 0,
   /// to choose the order, then the model of the chosen order is identified again
-  /// with the horizon for that order. Reduced if the data are short.
+  /// with the horizon for that order. Then the slowest-mode rule: the past and
+  /// future windows (2 i samples of the grid identified on) must span one period
+  /// of the slowest oscillatory mode of that model (damping <= 0.3); when they do
+  /// not, the model is identified once more at i = ceil(period / 2), up to
+  /// kSlowestModeMaxHankelRows Hankel rows (a 23 Hz mode at 2 kHz: i = 44, where
+  /// 2 ceil(8 / 1) = 16 missed it). Reduced if the data are short. The result's
+  /// horizon_rule says which rule set it.
   int horizon = 0;
   HankelRoute route = HankelRoute::automatic;
   bool remove_means = true;        ///< subtract channel means first (offsets returned in the result)
   bool enforce_stability = false;  ///< A from the zero-padded shift (Chui & Maciejowski 1996): always stable
+  /// Keep an unstable least-squares A. By default (false) an A with a pole on or
+  /// outside the unit circle has those poles reflected to 1/conj(z) (the same
+  /// frequency, the mirrored damping; B, D, x0 then fitted to it) and a warning
+  /// says so: from a stable plant's data an unstable estimate is an artefact of the
+  /// horizon or the order, and its simulation diverges. The unstable estimate is
+  /// kept, with a warning, when it fits the estimation data by more than 5 points
+  /// better than the reflected one (a growing record: a plant that is itself
+  /// unstable). Set it to keep the unstable estimate in any case.
+  bool allow_unstable = false;
   bool estimate_kalman_gain = true;
   bool refine_bdx = true;               ///< B, D, x0 by least squares on the simulation error (step 6)
   /// Per experiment, bounds the cost of step 6 (O(N l p^2)); 50 000 samples
@@ -122,6 +138,15 @@ struct N4sidOptions {
   /// 1 / oblique_min_sine. Matters for band-limited inputs and the N4SID
   /// weighting (which uses O_i itself); 0 = keep every direction.
   double oblique_min_sine = 0.1;
+  /// Stabilisation diagram (subspace/stabilization_diagram.hpp): the poles of every
+  /// order stabilization_order_lo..stabilization_order_hi, from this run's SVD (no
+  /// further compression), in N4sidResult::stabilization; hi = 0: none, unless
+  /// order_rule is stabilization, which uses orders max(lo, 1)..the largest
+  /// searched. hi must fit under the horizon (horizon x outputs > hi): with
+  /// horizon 0 the automatic horizon is sized for max(max_order, hi) and is at
+  /// least detail::kStabilizationMinHorizon.
+  int stabilization_order_lo = 0, stabilization_order_hi = 0;
+  StabilizationOptions stabilization;
   /// An input is "not excited" when its standard deviation is below this
   /// fraction of its mean magnitude (or exactly zero).
   double constant_input_tolerance = 1e-12;
@@ -139,6 +164,7 @@ struct N4sidResult {
   Eigen::VectorXd canonical_correlations;
   int order = 0;
   int horizon = 0;
+  std::string horizon_rule;  ///< which rule set the horizon (or "given by the user")
   std::string order_rule;  ///< which rule chose the order (or "given by the user")
   SubspaceWeighting weighting = SubspaceWeighting::n4sid;
   HankelRoute route_used = HankelRoute::qr;
@@ -148,6 +174,9 @@ struct N4sidResult {
   /// (near 0: the input is band-limited or too smooth to separate them).
   double past_future_min_sine = 1;
   int oblique_dropped_directions = 0;  ///< past directions left out of O_i (N4sidOptions::oblique_min_sine)
+  /// Spectral radius of the least-squares A when it was unstable and its poles
+  /// were reflected (N4sidOptions::allow_unstable); 0 when not needed.
+  double reflected_spectral_radius = 0;
   Eigen::VectorXd fit_percent;         ///< simulation fit on the estimation data, per output
   double excited_band_low_hz = 0, excited_band_high_hz = 0;  ///< where the inputs carry power
   double out_of_band_gain_ratio = 0;  ///< max gain above the excited band / max gain inside it
@@ -159,10 +188,14 @@ struct N4sidResult {
   bool band_limited = false;  ///< model includes the band-limiting Butterworth filter at its inputs (order + m * filter order)
   std::vector<std::string> warnings;
   int kalman_iterations = 0;
+  /// The stabilisation diagram when asked for (N4sidOptions::stabilization_order_hi
+  /// or the stabilization order rule); order_hi = 0 otherwise.
+  StabilizationDiagram stabilization;
 
   std::string brief_report() const {
     std::ostringstream s;
-    s << to_string(weighting) << ": order " << order << " (" << order_rule << "), horizon " << horizon << ", "
+    s << to_string(weighting) << ": order " << order << " (" << order_rule << "), horizon " << horizon
+      << (horizon_rule.empty() ? std::string() : " (" + horizon_rule + ")") << ", "
       << model.inputs() << " input(s), " << model.outputs() << " output(s), Hankel route " << to_string(route_used);
     return s.str();
   }
@@ -173,13 +206,36 @@ namespace detail {
 /// The order the automatic horizon is sized for when max_order is 0 (no cap).
 inline constexpr int kHorizonNominalMaxOrder = 20;
 
-/// The automatic horizon of N4sidOptions::horizon.
+/// The automatic horizon of N4sidOptions::horizon (before the slowest-mode rule).
 inline int automatic_horizon(int order, int max_order, Eigen::Index outputs) {
   const auto l = static_cast<double>(outputs);
   if (order > 0) return std::max(10, 2 * static_cast<int>(std::ceil(order / l)));
   const int sized_for = max_order > 0 ? max_order : kHorizonNominalMaxOrder;
   return std::max(10, static_cast<int>(std::ceil(1.5 * sized_for / l)));
 }
+
+/// `horizon` shortened until the data hold it: 2 i samples in the shortest
+/// experiment and at least ~4 Hankel columns per row (8 i (m + l) <= samples).
+inline int record_limited_horizon(int horizon, const IoData& data) {
+  const Eigen::Index m = data.inputs(), l = data.outputs();
+  Eigen::Index shortest = data.experiments.front().samples();
+  for (const auto& e : data.experiments) shortest = std::min(shortest, e.samples());
+  while (horizon > 2 && (2 * horizon > shortest || 4 * 2 * horizon * (m + l) > data.total_samples())) --horizon;
+  return horizon;
+}
+
+/// The smallest automatic horizon of a stabilisation diagram: twice the
+/// identification default, because a diagram needs the low modes' damping to
+/// settle from order to order (the 28-sensor beam of the acceptance tests: at
+/// horizon 10 the 14.6 and 38.8 Hz modes never stabilise within 5 % in damping
+/// over orders 2..60, at 20 all twelve modes do).
+inline constexpr int kStabilizationMinHorizon = 20;
+
+/// Hankel rows 2 i (m + l) up to which the slowest-mode rule may lengthen the
+/// automatic horizon (the compression costs O(N rows^2)): 400, i = 100 for one
+/// input and one output; with many channels the rule does not lengthen past the
+/// automatic horizon.
+inline constexpr int kSlowestModeMaxHankelRows = 400;
 
 }  // namespace detail
 

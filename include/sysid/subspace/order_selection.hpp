@@ -3,7 +3,9 @@
 /// Purpose: choose the model order from the singular values of the weighted
 /// oblique projection of subspace identification.
 ///
-/// Method: three rules; the result says which one chose the order and why.
+/// Method: three rules on the singular values (a fourth, n4sid's `stable`, reads
+/// the stabilisation diagram: subspace/stabilization_diagram.hpp); the result says
+/// which one chose the order and why.
 ///  - svc (default): Bauer's singular-value criterion on the canonical
 ///    correlations sigma_k between future outputs (future inputs projected out)
 ///    and the past (D. Bauer, "Order estimation for subspace methods",
@@ -62,27 +64,32 @@ enum class OrderRule {
   svc,
   gap,
   test,
+  /// the lowest order holding every physical mode of the stabilisation diagram
+  /// (subspace/stabilization_diagram.hpp); n4sid only
+  stabilization,
 };
 
-/// The rule's name on the command line: auto, svc, gap, test.
+/// The rule's name on the command line: auto, svc, gap, test, stable.
 inline const char* to_string(OrderRule rule) {
   switch (rule) {
     case OrderRule::automatic: return "auto";
     case OrderRule::svc: return "svc";
     case OrderRule::gap: return "gap";
     case OrderRule::test: return "test";
+    case OrderRule::stabilization: return "stable";
   }
   return "?";
 }
 
 /// Every rule, in the order the command line lists them.
-inline constexpr OrderRule kOrderRules[] = {OrderRule::automatic, OrderRule::svc, OrderRule::gap, OrderRule::test};
+inline constexpr OrderRule kOrderRules[] = {OrderRule::automatic, OrderRule::svc, OrderRule::gap, OrderRule::test,
+                                            OrderRule::stabilization};
 
 /// The rule named `name` (to_string's names); std::invalid_argument otherwise.
 inline OrderRule order_rule_from_name(const std::string& name) {
   for (const OrderRule r : kOrderRules)
     if (name == to_string(r)) return r;
-  throw std::invalid_argument("unknown order rule '" + name + "' (auto, svc, gap or test)");
+  throw std::invalid_argument("unknown order rule '" + name + "' (auto, svc, gap, test or stable)");
 }
 
 struct OrderChoice {

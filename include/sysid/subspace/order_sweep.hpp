@@ -54,12 +54,7 @@ struct OrderSweepEntry {
 /// known): n4sid's automatic horizon for a given order (detail::automatic_horizon),
 /// shortened for short data by the same rule as n4sid.
 inline int order_sweep_horizon(const IoData& data, int hi, int max_order) {
-  const Eigen::Index m = data.inputs(), l = data.outputs();
-  int horizon = detail::automatic_horizon(hi, max_order, l);
-  Eigen::Index shortest = data.experiments.front().samples();
-  for (const auto& e : data.experiments) shortest = std::min(shortest, e.samples());
-  while (horizon > 2 && (2 * horizon > shortest || 4 * 2 * horizon * (m + l) > data.total_samples())) --horizon;
-  return horizon;
+  return detail::record_limited_horizon(detail::automatic_horizon(hi, max_order, data.outputs()), data);
 }
 
 /// Purpose: the order sweep described in the file comment.

@@ -1,0 +1,222 @@
+// The stabilisation diagram (see include/sysid/subspace/stabilization_diagram.hpp).
+#include <sysid/subspace/stabilization_diagram.hpp>
+
+#include <sysid/core/format_number.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <cstdio>
+#include <limits>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+namespace sysid {
+
+namespace {
+
+double median_of(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t h = v.size() / 2;
+  return v.size() % 2 == 1 ? v[h] : 0.5 * (v[h - 1] + v[h]);
+}
+
+/// The mode candidates of one order: oscillatory poles (Im z > 0) with a damping
+/// ratio in (0, max_damping], by frequency.
+std::vector<StabilizationPole> candidates_of(const OrderPoles& op, double Ts, double max_damping) {
+  std::vector<StabilizationPole> out;
+  for (Eigen::Index k = 0; k < op.poles.size(); ++k) {
+    const std::complex<double> z = op.poles(k);
+    if (!(z.imag() > 0.0) || std::abs(z) == 0.0) continue;
+    const std::complex<double> s = std::log(z) / Ts;
+    const double wn = std::abs(s), damping = -s.real() / wn;
+    if (!(damping > 0.0 && damping <= max_damping)) continue;
+    StabilizationPole p;
+    p.order = op.order;
+    p.freq_hz = wn / (2.0 * std::numbers::pi);
+    p.damping = damping;
+    if (op.shapes.cols() == op.poles.size() && op.shapes.rows() > 0) {
+      p.shape = op.shapes.col(k);
+      const double norm = p.shape.norm();
+      if (norm > 0.0) p.shape /= norm;
+    }
+    out.push_back(std::move(p));
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.freq_hz < b.freq_hz; });
+  return out;
+}
+
+/// Marks `p` against the candidates of the order below: the nearest in frequency
+/// (with shapes: the best MAC among those within the frequency tolerance).
+void mark_against(StabilizationPole& p, const std::vector<StabilizationPole>& below, const StabilizationOptions& o,
+                  bool with_shapes) {
+  const StabilizationPole* nearest = nullptr;
+  double nearest_gap = std::numeric_limits<double>::infinity(), best_mac = -1.0;
+  for (const auto& q : below) {
+    const double gap = std::abs(p.freq_hz - q.freq_hz) / q.freq_hz;
+    if (with_shapes && gap <= o.frequency_tolerance) {
+      const double mac = modal_assurance_criterion(p.shape, q.shape);
+      if (mac > best_mac) {
+        best_mac = mac;
+        nearest = &q;
+        nearest_gap = gap;
+      }
+    } else if (best_mac < 0.0 && gap < nearest_gap) {
+      nearest = &q;
+      nearest_gap = gap;
+    }
+  }
+  if (nearest == nullptr) return;
+  p.stable_frequency = nearest_gap <= o.frequency_tolerance;
+  p.stable_damping = p.stable_frequency && std::abs(p.damping - nearest->damping) <= o.damping_tolerance * nearest->damping;
+  p.stable_shape = p.stable_frequency && with_shapes && best_mac >= 1.0 - o.mac_tolerance;
+}
+
+/// Columns of fully stable poles (file comment), each with at most one pole per order.
+std::vector<std::vector<StabilizationPole*>> stable_columns(std::vector<StabilizationPole>& poles, bool with_shapes,
+                                                            const StabilizationOptions& o) {
+  std::vector<StabilizationPole*> stable;
+  for (auto& p : poles)
+    if (p.mark(with_shapes) == 's') stable.push_back(&p);
+  std::sort(stable.begin(), stable.end(), [](const auto* a, const auto* b) { return a->freq_hz < b->freq_hz; });
+  std::vector<std::vector<StabilizationPole*>> columns;
+  double sum = 0.0;
+  for (StabilizationPole* p : stable) {
+    if (!columns.empty()) {
+      auto& column = columns.back();
+      const double mean = sum / static_cast<double>(column.size());
+      if (std::abs(p->freq_hz - mean) <= 2.0 * o.frequency_tolerance * mean) {
+        // One pole per order: of two, the one nearer the column's mean stays.
+        auto same = std::find_if(column.begin(), column.end(), [&](const auto* q) { return q->order == p->order; });
+        if (same == column.end()) {
+          column.push_back(p);
+          sum += p->freq_hz;
+        } else if (std::abs(p->freq_hz - mean) < std::abs((*same)->freq_hz - mean)) {
+          sum += p->freq_hz - (*same)->freq_hz;
+          *same = p;
+        }
+        continue;
+      }
+    }
+    columns.push_back({p});
+    sum = p->freq_hz;
+  }
+  return columns;
+}
+
+}  // namespace
+
+double modal_assurance_criterion(const Eigen::VectorXcd& a, const Eigen::VectorXcd& b) {
+  if (a.size() != b.size() || a.size() == 0) return 0.0;
+  const double na = a.squaredNorm(), nb = b.squaredNorm();
+  if (!(na > 0.0 && nb > 0.0)) return 0.0;
+  return std::norm(a.dot(b)) / (na * nb);  // a.dot(b) = a^H b
+}
+
+StabilizationDiagram stabilization_diagram(const std::vector<OrderPoles>& orders, double Ts, const StabilizationOptions& o) {
+  if (!(Ts > 0.0)) throw std::invalid_argument("stabilization diagram: need Ts > 0");
+  if (orders.empty()) throw std::invalid_argument("stabilization diagram: need at least one order");
+  for (std::size_t k = 1; k < orders.size(); ++k)
+    if (orders[k].order != orders[k - 1].order + 1)
+      throw std::invalid_argument("stabilization diagram: need consecutive increasing orders");
+  if (!(o.frequency_tolerance > 0.0 && o.damping_tolerance > 0.0 && o.mac_tolerance > 0.0 && o.max_damping > 0.0))
+    throw std::invalid_argument("stabilization diagram: need positive tolerances and max_damping");
+  StabilizationDiagram d;
+  d.options = o;
+  d.order_lo = orders.front().order;
+  d.order_hi = orders.back().order;
+  d.with_shapes = orders.front().shapes.rows() > 1;
+  std::vector<std::vector<StabilizationPole>> by_order;
+  for (const auto& op : orders) {
+    if (op.shapes.size() > 0 && op.shapes.cols() != op.poles.size())
+      throw std::invalid_argument("stabilization diagram: order " + std::to_string(op.order) + " has " +
+                                  std::to_string(op.shapes.cols()) + " shapes for " + std::to_string(op.poles.size()) + " poles");
+    by_order.push_back(candidates_of(op, Ts, o.max_damping));
+    if (by_order.size() > 1)
+      for (auto& p : by_order.back()) mark_against(p, by_order[by_order.size() - 2], o, d.with_shapes);
+  }
+  for (auto& order : by_order)
+    for (auto& p : order) d.poles.push_back(std::move(p));
+
+  // Physical modes: the columns that persist.
+  for (auto& column : stable_columns(d.poles, d.with_shapes, o)) {
+    int first = std::numeric_limits<int>::max();
+    const StabilizationPole* top = nullptr;
+    std::vector<double> f, z;
+    for (const auto* p : column) {
+      first = std::min(first, p->order);
+      if (top == nullptr || p->order > top->order) top = p;
+      f.push_back(p->freq_hz);
+      z.push_back(p->damping);
+    }
+    const int span = d.order_hi - first + 1;
+    const double latest_start = d.order_lo + o.latest_column_start * (d.order_hi - d.order_lo);
+    if (static_cast<int>(column.size()) < o.min_column_poles ||
+        static_cast<double>(column.size()) < o.min_column_share * static_cast<double>(span) || first > latest_start)
+      continue;
+    PhysicalMode mode;
+    mode.freq_hz = median_of(f);
+    mode.damping = median_of(z);
+    mode.freq_spread = (*std::max_element(f.begin(), f.end()) - *std::min_element(f.begin(), f.end())) / mode.freq_hz;
+    mode.damping_spread = (*std::max_element(z.begin(), z.end()) - *std::min_element(z.begin(), z.end())) / mode.damping;
+    mode.first_order = first;
+    mode.stable_poles = static_cast<int>(column.size());
+    if (d.with_shapes) mode.shape = top->shape;
+    for (auto* p : column) p->mode = static_cast<int>(d.modes.size());
+    d.modes.push_back(std::move(mode));
+  }
+
+  // The order rule: the lowest order with a candidate at every physical mode.
+  if (d.modes.empty()) {
+    d.rule = "stabilization diagram: no column of stable poles (" + d.criteria() + ")";
+    return d;
+  }
+  for (const auto& op : orders) {
+    const auto candidates = candidates_of(op, Ts, o.max_damping);
+    const bool all = std::all_of(d.modes.begin(), d.modes.end(), [&](const PhysicalMode& m) {
+      return std::any_of(candidates.begin(), candidates.end(), [&](const StabilizationPole& p) {
+        return std::abs(p.freq_hz - m.freq_hz) <= 2.0 * o.frequency_tolerance * m.freq_hz;
+      });
+    });
+    if (all) {
+      d.chosen_order = op.order;
+      break;
+    }
+  }
+  std::ostringstream why;
+  why << "stabilization diagram: " << d.modes.size() << " physical mode(s) stable over orders " << d.order_lo << ".." << d.order_hi;
+  if (d.chosen_order > 0)
+    why << ", all present from order " << d.chosen_order;
+  else
+    why << ", never all present in one order";
+  why << " (" << d.criteria() << ")";
+  d.rule = why.str();
+  return d;
+}
+
+std::string StabilizationDiagram::criteria() const {
+  std::ostringstream s;
+  s << "stable: frequency within " << format_number(100.0 * options.frequency_tolerance, 3) << " %, damping within "
+    << format_number(100.0 * options.damping_tolerance, 3) << " %";
+  if (with_shapes) s << ", MAC >= " << format_number(1.0 - options.mac_tolerance, 4);
+  s << " of the order below; modes: damping <= " << format_number(options.max_damping, 3);
+  return s.str();
+}
+
+std::string StabilizationDiagram::modes_table() const {
+  std::ostringstream s;
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "%4s  %12s  %10s  %12s  %12s  %6s  %7s\n", "mode", "freq [Hz]", "damping", "freq spread",
+                "damp spread", "from", "stable");
+  s << buf;
+  for (std::size_t k = 0; k < modes.size(); ++k) {
+    const PhysicalMode& m = modes[k];
+    std::snprintf(buf, sizeof buf, "%4zu  %12.6g  %10.4g  %11.3g%%  %11.3g%%  %6d  %7d\n", k + 1, m.freq_hz, m.damping,
+                  100.0 * m.freq_spread, 100.0 * m.damping_spread, m.first_order, m.stable_poles);
+    s << buf;
+  }
+  return s.str();
+}
+
+}  // namespace sysid
