@@ -345,8 +345,9 @@ inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& option
     int hi = options.stabilization_order_hi > 0 ? options.stabilization_order_hi : top;
     if (hi > static_cast<int>(i * l) - 1)
       throw std::invalid_argument("n4sid: the stabilization diagram's highest order " + std::to_string(hi) +
-                                  " needs horizon * outputs > " + std::to_string(hi) + " (horizon " + std::to_string(i) +
-                                  "); increase --horizon");
+                                  " needs horizon * outputs > " + std::to_string(hi) + " (horizon " + std::to_string(i) + ", " +
+                                  std::to_string(l) + " output(s)); lower the highest order, or pass a longer --horizon "
+                                  "(the record must hold 8 x horizon x channels samples)");
     while (hi > lo && !supported(hi)) --hi;
     std::vector<OrderPoles> orders;
     for (int n = lo; n <= hi; ++n) {
