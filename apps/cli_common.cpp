@@ -4,6 +4,7 @@
 #include <sysid/core/errors.hpp>
 #include <sysid/core/format_number.hpp>
 #include <sysid/io/atomic_file.hpp>
+#include <sysid/io/n4sid_model_file.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -239,16 +240,7 @@ void claim_outputs(const std::vector<std::string>& outputs, const std::vector<st
 
 void note(const std::string& verb, const std::string& message) { std::cerr << "sysid " << verb << ": " << message << "\n"; }
 
-nlohmann::json to_json_list(const Eigen::VectorXd& v) {
-  nlohmann::json j = nlohmann::json::array();
-  for (Eigen::Index i = 0; i < v.size(); ++i) {
-    if (std::isfinite(v(i)))
-      j.push_back(v(i));
-    else
-      j.push_back(nullptr);
-  }
-  return j;
-}
+nlohmann::json to_json_list(const Eigen::VectorXd& v) { return json_list_or_null(v); }
 
 void add_validation_options(CLI::App& cmd, std::string& validate, std::optional<double>& split) {
   CLI::Option* val =

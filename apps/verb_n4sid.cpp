@@ -5,6 +5,7 @@
 #include <sysid/core/modal_table.hpp>
 #include <sysid/io/atomic_file.hpp>
 #include <sysid/io/model_json.hpp>
+#include <sysid/io/n4sid_model_file.hpp>
 #include <sysid/subspace/n4sid.hpp>
 #include <sysid/subspace/order_sweep.hpp>
 #include <sysid/validate/compare.hpp>
@@ -375,41 +376,14 @@ void run_n4sid(const N4sidArgs& a) {
     if (!a.plot.empty()) plot_order_choice(a, res);
     return;
   }
-  ModelFile file;
-  file.type = "state-space";
-  file.model = res.model;
-  file.model.input_names = all_input_names;
-  file.model.output_names = all_output_names;
-  file.K = res.K;
-  file.noise_covariance = res.noise_covariance;
-  file.x0 = res.x0;
-  file.input_offset = res.input_offset;
-  file.output_offset = res.output_offset;
+  ModelFile file = n4sid_model_file(res, options, all_input_names, all_output_names);
   nlohmann::json& p = file.provenance;
-  p["method"] = to_string(res.weighting);
-  p["order"] = res.order;
-  p["order_rule"] = res.order_rule;
-  p["horizon"] = res.horizon;
   p["data"] = a.log_path;
-  p["fit_percent"] = to_json_list(res.fit_percent);
   if (validation) {
     p["validation_fit_percent"] = to_json_list(validation_fit);
     p["validation"] = validation_label;
   }
   if (order.sweep && !diagram) p["order_sweep"] = sweep_json;
-  p["singular_values"] = to_json_list(res.singular_values);
-  p["excited_band_hz"] = {res.excited_band_low_hz, res.excited_band_high_hz};
-  p["hankel_route"] = to_string(res.route_used);
-  p["decimation"] = res.decimation;
-  p["observability_condition"] = res.observability_condition;
-  p["past_future_min_sine"] = res.past_future_min_sine;
-  if (a.enforce_stability) p["enforce_stability"] = true;
-  if (a.allow_unstable) p["allow_unstable"] = true;
-  if (a.band_limit_hz) {
-    p["band_limit_hz"] = *a.band_limit_hz;
-    p["band_limit_order"] = a.band_limit_order;
-  }
-  p["sysid_version"] = SYSID_VERSION_STRING;
   write_model_json(a.out, file);
   note(verb, "wrote " + a.out);
   if (!a.plot.empty()) plot_order_choice(a, res);

@@ -1,7 +1,6 @@
 // sysid arx | ar | armax | arma | oe: polynomial (prediction-error) models from a
 // CSV log, one model per output over all inputs ("stacked MISO"), written as a
 // "polynomial" model file with its innovation-form state space.
-#include <sysid/config.hpp>
 #include <sysid/core/modal_table.hpp>
 #include <sysid/core/parallel_for.hpp>
 #include <sysid/io/atomic_file.hpp>
@@ -146,11 +145,8 @@ void run_polynomial(Structure structure, const PolynomialArgs& a) {
   for (Eigen::Index r = 0; r < l; ++r)
     report << verb << " output '" << est.output_name(r) << "': " << fit.method_notes[static_cast<std::size_t>(r)]
            << (structure == Structure::ar ? " (" + a.ar_method + ")" : std::string()) << "\n";
-  const std::string structure_label = verb;
 
-  ModelFile file = polynomial_model_file(models, structure_label, est.input_names, est.output_names);
-  file.input_offset = input_offset;
-  file.output_offset = output_offset;
+  ModelFile file = polynomial_fit_model_file(fit, search.fit, est.input_names, est.output_names);
   for (Eigen::Index r = 0; r < l; ++r) {
     const PolynomialModel& pm = models[static_cast<std::size_t>(r)];
     report << "output '" << est.output_name(r) << "': noise variance " << fmt(pm.noise_variance, 5) << "\n  A = "
@@ -190,20 +186,9 @@ void run_polynomial(Structure structure, const PolynomialArgs& a) {
                                 "(--write-unconverged writes it anyway)");
   if (!a.out.empty()) {
     nlohmann::json& p = file.provenance;
-    p["method"] = verb;
     p["data"] = a.log_path;
-    const PolynomialOrders& chosen = search.fit.orders;
-    if (uses_a) p["na"] = chosen.na;
-    if (has_inputs(structure)) {
-      p["nb"] = chosen.nb;
-      p["nk"] = chosen.nk;
-    }
-    if (uses_c) p["nc"] = chosen.nc;
-    if (structure == Structure::oe) p["nf"] = chosen.nf;
     if (combos.size() > 1) p["order_selection"] = to_string(search.criterion);
     if (data.validation) p["validation"] = data.validation_label;
-    p["converged"] = converged;
-    p["sysid_version"] = SYSID_VERSION_STRING;
     write_model_json(a.out, file);
     note(verb, "wrote " + a.out);
   }

@@ -65,13 +65,8 @@ void run_lms(const LmsArgs& a) {
   o.gamma = a.gamma.empty() ? std::vector<double>(static_cast<std::size_t>(a.steps), 1.0 / a.steps) : parse_numbers(a.gamma, "--gamma");
   if (!a.gamma.empty() && static_cast<int>(o.gamma.size()) != a.steps && a.steps != 1)
     throw std::invalid_argument("lms: --steps " + std::to_string(a.steps) + " but --gamma has " + std::to_string(o.gamma.size()) + " weights");
-  const Eigen::RowVectorXd u_mean = e.u.colwise().mean(), y_mean = e.y.colwise().mean();
-  // The library's eps is absolute (squared input units); relative to the data's
-  // power it keeps the regularisation negligible whatever the units (inputs in
-  // nanometres or in kilonewtons).
-  const double u_power = (e.u.rowwise() - u_mean).squaredNorm() / static_cast<double>(e.u.rows());
-  if (u_power > 0.0) o.eps = 1e-8 * static_cast<double>(o.taps) * u_power;
-  const MultiStepNlmsResult r = multistep_nlms(e.u.rowwise() - u_mean, e.y.rowwise() - y_mean, o);
+  const MultiStepNlmsResult r = multistep_nlms_on_record(e.u, e.y, o);
+  const Eigen::RowVectorXd y_mean = e.y.colwise().mean();
   const double y_power = (e.y.rowwise() - y_mean).squaredNorm() / static_cast<double>(e.y.size());
   std::cout << "lms: " << o.taps << " taps, K = " << o.gamma.size() << " steps, mu " << o.mu << ", " << r.info.samples
             << " samples; final a-priori error power " << fmt(r.info.error_power, 4) << " ("

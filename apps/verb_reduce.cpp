@@ -6,6 +6,7 @@
 #include <sysid/io/atomic_file.hpp>
 #include <sysid/io/fem_model_file.hpp>
 #include <sysid/io/model_json.hpp>
+#include <sysid/io/reduced_model_file.hpp>
 #include <sysid/reduce/balanced_truncation.hpp>
 #include <sysid/reduce/hankel_singular_values.hpp>
 #include <sysid/reduce/modal_truncation.hpp>
@@ -201,64 +202,20 @@ void run_reduce(const ReduceArgs& a) {
   if (a.modes > 0 || a.ts > 0.0 || a.static_correction)
     throw std::invalid_argument("reduce: --modes, --ts and --static-correction need --fem");
   claim_outputs({a.out}, {a.model_path});
-  const int chosen = (a.order >= 0) + !a.max_error.empty() + !a.band.empty();
-  if (chosen != 1) throw std::invalid_argument("reduce: give exactly one of --order, --max-error, --band");
-  ModelFile file = load_model(a.model_path);
-  StateSpace sys = named_model(file);
-  // A time-series model (AR, ARMA: no inputs) is all noise model: reduce its
-  // innovation form y = C (zI - A)^-1 K e + e, the spectral factor whose
-  // modes shape the output spectrum.
-  const bool time_series = sys.inputs() == 0;
-  if (time_series) {
-    if (file.K.size() == 0)
-      throw std::invalid_argument("reduce: " + a.model_path + " has no inputs and no noise gain K: nothing to reduce");
-    sys.B = file.K;
-    sys.D = Eigen::MatrixXd::Identity(sys.outputs(), sys.outputs());
-    sys.input_names.clear();
-    for (Eigen::Index i = 0; i < sys.outputs(); ++i) sys.input_names.push_back("e_" + sys.output_name(i));
-  }
-  ReductionResult r;
-  if (!a.band.empty() || a.method == "modal") {
-    ModalTruncationOptions o;
-    if (!a.band.empty()) std::tie(o.f_lo_hz, o.f_hi_hz) = parse_range(a.band, "--band");
-    if (a.order >= 0) o.order = a.order;
-    if (!a.max_error.empty()) throw std::invalid_argument("reduce: --max-error needs a balanced method (--method balanced or spa)");
-    o.keep_dc_gain = a.keep_dc;
-    r = modal_truncation(sys, o);
-  } else {
-    BalancedTruncationOptions o;
-    o.order = a.order;
-    if (!a.max_error.empty()) o.max_error_ratio = parse_ratio(a.max_error);
-    o.method = a.method == "spa" ? BalancedMethod::singular_perturbation : BalancedMethod::truncation;
-    r = balanced_truncation(sys, o);
-  }
-  if (time_series) std::cout << "time-series model: reducing its innovation form (input = the innovation e)\n";
+  ReduceRequest request;
+  request.method = !a.band.empty() ? "modal" : a.method;
+  request.order = a.order;
+  if (!a.max_error.empty()) request.max_error_ratio = parse_ratio(a.max_error);
+  if (!a.band.empty()) request.band_hz = parse_range(a.band, "--band");
+  request.keep_dc_gain = a.keep_dc;
+  request.source = a.model_path;
+  const ReducedModelFile reduced = reduce_model_file(load_model(a.model_path), request);
+  const ReductionResult& r = reduced.reduction;
+  if (reduced.time_series) std::cout << "time-series model: reducing its innovation form (input = the innovation e)\n";
   std::cout << r.brief_report();
   if (!r.kept_modes.empty()) std::cout << "kept modes:\n" << format_modal_table(r.kept_modes);
-  ModelFile out;
-  out.model = r.model;
-  if (time_series) {
-    out.K = r.model.B;
-    out.model.B = Eigen::MatrixXd::Zero(r.model.order(), 0);
-    out.model.D = Eigen::MatrixXd::Zero(r.model.outputs(), 0);
-    out.model.input_names.clear();
-    out.noise_covariance = file.noise_covariance;
-  } else if (file.K.rows() == file.model.order() && !a.band.empty()) {
-    // Modal truncation keeps the modes' coordinates only up to a basis change:
-    // K cannot follow; the reduced model is deterministic.
-    warn("reduce", "the noise gain K is not carried over to the reduced model");
-  }
-  out.input_offset = file.input_offset;
-  out.output_offset = file.output_offset;
-  out.provenance["method"] = "reduce";
-  out.provenance["reduction"] = r.method;
-  out.provenance["source"] = a.model_path;
-  out.provenance["original_order"] = r.original_order;
-  out.provenance["order"] = r.order;
-  if (!std::isnan(r.error_ratio)) out.provenance["hsv_ratio"] = r.error_ratio;
-  if (!std::isnan(r.hinf_bound)) out.provenance["hinf_bound"] = r.hinf_bound;
-  if (!std::isnan(r.hinf_error)) out.provenance["hinf_error"] = r.hinf_error;
-  out.provenance["sysid_version"] = SYSID_VERSION_STRING;
+  for (const auto& w : reduced.warnings) warn("reduce", w);
+  const ModelFile& out = reduced.file;
   write_model_json(a.out, out);
   note("reduce", "wrote " + a.out);
 }

@@ -366,4 +366,17 @@ MultiStepNlmsResult multistep_nlms(const Eigen::MatrixBase<DU>& u, const Eigen::
   return res;
 }
 
+/// Purpose: the FIR of one recorded experiment as the command line (`sysid lms`)
+/// and the Python package (`sysid.lms`) identify it: channel means removed, and
+/// options.eps taken relative to the input power, 1e-8 L E[|u|^2], so the
+/// regularisation stays negligible whatever the units (inputs in nanometres or in
+/// kilonewtons); the library's eps is absolute (squared input units).
+inline MultiStepNlmsResult multistep_nlms_on_record(const Eigen::MatrixXd& u, const Eigen::MatrixXd& y,
+                                                    MultiStepNlmsOptions options) {
+  const Eigen::RowVectorXd u_mean = u.colwise().mean(), y_mean = y.colwise().mean();
+  const double u_power = (u.rowwise() - u_mean).squaredNorm() / static_cast<double>(std::max<Eigen::Index>(u.rows(), 1));
+  if (u_power > 0.0) options.eps = 1e-8 * static_cast<double>(options.taps) * u_power;
+  return multistep_nlms(u.rowwise() - u_mean, y.rowwise() - y_mean, options);
+}
+
 }  // namespace sysid

@@ -16,6 +16,8 @@
 /// diag(noise_variance).
 #include <sysid/core/errors.hpp>
 #include <sysid/io/model_json.hpp>
+#include <sysid/config.hpp>
+#include <sysid/pem/polynomial_fit.hpp>
 #include <sysid/pem/polynomial_model.hpp>
 
 #include <nlohmann/json.hpp>
@@ -64,6 +66,33 @@ inline ModelFile polynomial_model_file(const std::vector<PolynomialModel>& model
   file.extra["F"] = f;
   file.extra["nk"] = nk;
   file.extra["noise_variance"] = variance;
+  return file;
+}
+
+/// The model file of a polynomial fit (pem/polynomial_fit.hpp) as every caller
+/// writes it, the command line (apps/verb_polynomial.cpp) and the Python package
+/// alike: polynomial_model_file, the offsets, and the provenance of the fit
+/// (method, the orders the structure uses, converged, sysid_version); the caller
+/// adds what only it knows (the log's name, validation data, an order search).
+inline ModelFile polynomial_fit_model_file(const PolynomialFit& fit, const PolynomialFitOptions& options,
+                                           const std::vector<std::string>& input_names,
+                                           const std::vector<std::string>& output_names) {
+  const PolynomialStructure structure = options.structure;
+  ModelFile file = polynomial_model_file(fit.models, to_string(structure), input_names, output_names);
+  file.input_offset = fit.input_offset.head(fit.models.front().inputs());
+  file.output_offset = fit.output_offset;
+  nlohmann::json& p = file.provenance;
+  p["method"] = to_string(structure);
+  const PolynomialOrders& orders = options.orders;
+  if (structure != PolynomialStructure::oe) p["na"] = orders.na;
+  if (has_inputs(structure)) {
+    p["nb"] = orders.nb;
+    p["nk"] = orders.nk;
+  }
+  if (structure == PolynomialStructure::armax || structure == PolynomialStructure::arma) p["nc"] = orders.nc;
+  if (structure == PolynomialStructure::oe) p["nf"] = orders.nf;
+  p["converged"] = fit.converged;
+  p["sysid_version"] = SYSID_VERSION_STRING;
   return file;
 }
 

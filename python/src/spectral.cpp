@@ -1,0 +1,128 @@
+// sysid.frf, sysid.psd and sysid.filter: Welch spectra, H1/H2 frequency responses
+// with coherence and confidence bounds, and Butterworth filtering, as `sysid frf`,
+// `sysid psd` and `sysid filter` compute them.
+#include <sysid/signal/butterworth.hpp>
+#include <sysid/signal/sos_filter.hpp>
+#include <sysid/spectral/frf.hpp>
+#include <sysid/spectral/welch.hpp>
+#include <sysid/spectral/window.hpp>
+
+#include <nanobind/stl/pair.h>
+
+#include "bindings.hpp"
+
+namespace sysid::python {
+
+namespace {
+
+WelchOptions welch_options(Eigen::Index nfft, double overlap, const std::string& window, const std::string& detrend) {
+  WelchOptions o;
+  o.nfft = nfft;
+  o.overlap = overlap;
+  o.window = parse_window(window);
+  if (detrend == "none") o.detrend = Detrend::none;
+  else if (detrend == "mean") o.detrend = Detrend::mean;
+  else if (detrend == "linear") o.detrend = Detrend::linear;
+  else throw std::invalid_argument("detrend: expected 'none', 'mean' or 'linear', found '" + detrend + "'");
+  return o;
+}
+
+/// A per-frequency list of l x m matrices as one (frequencies, l, m) array.
+template <class Matrix>
+nb::ndarray<nb::numpy, typename Matrix::Scalar, nb::ndim<3>> stack(const std::vector<Matrix>& per_frequency) {
+  using Scalar = typename Matrix::Scalar;
+  const std::size_t count = per_frequency.size();
+  const std::size_t l = count ? static_cast<std::size_t>(per_frequency.front().rows()) : 0;
+  const std::size_t m = count ? static_cast<std::size_t>(per_frequency.front().cols()) : 0;
+  auto* data = new Scalar[std::max<std::size_t>(count * l * m, 1)];
+  for (std::size_t k = 0; k < count; ++k)
+    for (std::size_t i = 0; i < l; ++i)
+      for (std::size_t j = 0; j < m; ++j)
+        data[(k * l + i) * m + j] = per_frequency[k](static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+  nb::capsule owner(data, [](void* p) noexcept { delete[] static_cast<Scalar*>(p); });
+  return nb::ndarray<nb::numpy, Scalar, nb::ndim<3>>(data, {count, l, m}, owner);
+}
+
+nb::dict frf_estimate(const SampleArray& u, const SampleArray& y, double Ts, Eigen::Index nfft, double overlap,
+                      const std::string& window, const std::string& detrend, const std::string& estimator, double confidence) {
+  IoData data = io_data(u, y, Ts, {}, {});
+  FrfOptions o;
+  o.welch = welch_options(nfft, overlap, window, detrend);
+  if (estimator != "h1" && estimator != "h2") throw std::invalid_argument("estimator: expected 'h1' or 'h2', found '" + estimator + "'");
+  o.estimator = estimator == "h2" ? FrfEstimator::h2 : FrfEstimator::h1;
+  o.confidence = confidence;
+  FrfResult r;
+  {
+    nb::gil_scoped_release release;
+    r = frf(data, o);
+  }
+  nb::dict out;
+  out["freq_hz"] = r.freq_hz;
+  out["H"] = stack(r.H);
+  out["coherence"] = stack(r.coherence);
+  out["magnitude_lower"] = stack(r.magnitude_lower);
+  out["magnitude_upper"] = stack(r.magnitude_upper);
+  out["phase_halfwidth_rad"] = stack(r.phase_halfwidth_rad);
+  out["input_psd"] = r.input_psd;
+  out["output_psd"] = r.output_psd;
+  out["nfft"] = r.nfft;
+  return out;
+}
+
+std::pair<Eigen::VectorXd, Eigen::MatrixXd> psd_estimate(const SampleArray& x, double Ts, Eigen::Index nfft, double overlap,
+                                                         const std::string& window, const std::string& detrend,
+                                                         const std::string& scaling) {
+  if (!(Ts > 0.0)) throw std::invalid_argument("psd: Ts must be > 0");
+  WelchOptions o = welch_options(nfft, overlap, window, detrend);
+  if (scaling != "density" && scaling != "spectrum")
+    throw std::invalid_argument("scaling: expected 'density' or 'spectrum', found '" + scaling + "'");
+  o.scaling = scaling == "spectrum" ? SpectralScaling::spectrum : SpectralScaling::density;
+  const StridedMap view = sample_view(x, "x");
+  PowerSpectrum r;
+  {
+    nb::gil_scoped_release release;
+    r = welch_psd(view, 1.0 / Ts, o);
+  }
+  return {std::move(r.freq_hz), std::move(r.psd)};
+}
+
+Eigen::MatrixXd butterworth_filter(const SampleArray& x, double Ts, std::optional<double> lowpass,
+                                   std::optional<double> highpass, std::optional<std::pair<double, double>> bandpass,
+                                   int order, bool zero_phase) {
+  if (!(Ts > 0.0)) throw std::invalid_argument("filter: Ts must be > 0");
+  if ((lowpass.has_value() + highpass.has_value() + bandpass.has_value()) != 1)
+    throw std::invalid_argument("filter: give exactly one of lowpass, highpass, bandpass");
+  const double fs = 1.0 / Ts;
+  const SecondOrderSections f = lowpass    ? butterworth(order, BandType::lowpass, *lowpass, 0.0, fs)
+                                : highpass ? butterworth(order, BandType::highpass, *highpass, 0.0, fs)
+                                           : butterworth(order, BandType::bandpass, bandpass->first, bandpass->second, fs);
+  const StridedMap view = sample_view(x, "x");
+  nb::gil_scoped_release release;
+  return zero_phase ? filtfilt(f, view) : sos_filter(f, view);
+}
+
+}  // namespace
+
+void bind_spectral(nb::module_& m) {
+  const WelchOptions defaults;
+  m.def("frf", &frf_estimate, nb::arg("u"), nb::arg("y"), nb::arg("Ts"), nb::kw_only(), nb::arg("nfft") = defaults.nfft,
+        nb::arg("overlap") = defaults.overlap, nb::arg("window") = "hann", nb::arg("detrend") = "mean",
+        nb::arg("estimator") = "h1", nb::arg("confidence") = FrfOptions{}.confidence,
+        "Frequency response by Welch averaging (`sysid frf`): a dict with freq_hz, H (frequencies x outputs x\n"
+        "inputs, complex), coherence, magnitude_lower/upper and phase_halfwidth_rad (the confidence bounds),\n"
+        "input_psd, output_psd and nfft. estimator: 'h1' (noise on the outputs) or 'h2' (on the inputs).");
+  m.def("psd", &psd_estimate, nb::arg("x"), nb::arg("Ts"), nb::kw_only(), nb::arg("nfft") = defaults.nfft,
+        nb::arg("overlap") = defaults.overlap, nb::arg("window") = "hann", nb::arg("detrend") = "mean",
+        nb::arg("scaling") = "density",
+        "One-sided Welch power spectrum of each column of x (`sysid psd`): (freq_hz, psd), psd frequencies x\n"
+        "channels in units^2/Hz ('density') or units^2 ('spectrum'). window: 'hann', 'hamming',\n"
+        "'blackman-harris', 'flattop', 'rectangular'.");
+  m.def("filter", &butterworth_filter, nb::arg("x"), nb::arg("Ts"), nb::kw_only(), nb::arg("lowpass") = nb::none(),
+        nb::arg("highpass") = nb::none(), nb::arg("bandpass") = nb::none(), nb::arg("order") = 4,
+        nb::arg("zero_phase") = false,
+        "Butterworth filtering of each column of x (`sysid filter`): one of lowpass=Hz, highpass=Hz,\n"
+        "bandpass=(lo, hi); zero_phase runs it forwards and backwards (filtfilt, twice the order in\n"
+        "magnitude, no delay).");
+}
+
+}  // namespace sysid::python

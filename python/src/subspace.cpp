@@ -1,0 +1,125 @@
+// sysid.n4sid (and moesp, cva): subspace identification, the same call and the same
+// model file as `sysid n4sid` (io/n4sid_model_file.hpp).
+#include <sysid/io/n4sid_model_file.hpp>
+#include <sysid/subspace/n4sid.hpp>
+
+#include <nanobind/stl/variant.h>
+
+#include <chrono>
+#include <variant>
+
+#include "bindings.hpp"
+
+namespace sysid::python {
+
+namespace {
+
+SubspaceWeighting weighting_from_name(const std::string& method) {
+  if (method == "n4sid") return SubspaceWeighting::n4sid;
+  if (method == "moesp") return SubspaceWeighting::moesp;
+  if (method == "cva") return SubspaceWeighting::cva;
+  throw std::invalid_argument("method: expected 'n4sid', 'moesp' or 'cva', found '" + method + "'");
+}
+
+HankelRoute route_from_name(const std::string& name) {
+  for (const HankelRoute r : {HankelRoute::automatic, HankelRoute::qr, HankelRoute::cholesky, HankelRoute::cholesky_double_double})
+    if (name == to_string(r) || (name == "auto" && r == HankelRoute::automatic)) return r;
+  throw std::invalid_argument("hankel: expected 'auto', 'qr', 'cholesky' or 'cholesky_double_double', found '" + name + "'");
+}
+
+/// order: a number, or "auto" / None for the order rule's choice.
+int order_from(const std::variant<int, std::string, nb::none>& order) {
+  if (const int* n = std::get_if<int>(&order)) {
+    if (*n < 1) throw std::invalid_argument("order: expected a number >= 1 or 'auto', found " + std::to_string(*n));
+    return *n;
+  }
+  if (const std::string* s = std::get_if<std::string>(&order); s && *s != "auto")
+    throw std::invalid_argument("order: expected a number >= 1 or 'auto', found '" + *s + "'");
+  return 0;
+}
+
+ModelFile identify_subspace(const std::optional<SampleArray>& u, const SampleArray& y, double Ts,
+                            const std::variant<int, std::string, nb::none>& order, const std::string& method,
+                            std::optional<int> horizon, std::optional<int> max_order, const std::string& order_rule,
+                            bool enforce_stability, bool allow_unstable, std::optional<double> band_limit_hz,
+                            int band_limit_order, std::optional<int> decimation, const std::string& hankel,
+                            const std::vector<std::string>& inputs, const std::vector<std::string>& outputs) {
+  if (!u) throw std::invalid_argument("n4sid: needs the inputs u (an AR or ARMA model describes a time series)");
+  N4sidOptions options;
+  options.weighting = weighting_from_name(method);
+  options.order = order_from(order);
+  if (max_order) options.max_order = *max_order;
+  options.order_rule = order_rule_from_name(order_rule);
+  if (horizon) options.horizon = *horizon;
+  options.enforce_stability = enforce_stability;
+  options.allow_unstable = allow_unstable;
+  if (band_limit_hz) {
+    if (!(*band_limit_hz > 0.0)) throw std::invalid_argument("band_limit_hz: expected a frequency > 0");
+    options.band_limit_hz = *band_limit_hz;
+  }
+  options.band_limit_order = band_limit_order;
+  if (decimation) options.decimation = *decimation;
+  options.route = route_from_name(hankel);
+  IoData data = io_data(u, y, Ts, inputs, outputs);
+  const std::vector<std::string> input_names = data.input_names, output_names = data.output_names;
+  ModelFile file;
+  std::vector<std::string> warnings;
+  {
+    nb::gil_scoped_release release;
+    N4sidResult result = n4sid(std::move(data), options);
+    file = n4sid_model_file(result, options, input_names, output_names);
+    warnings = std::move(result.warnings);
+  }
+  issue_warnings(warnings);
+  return file;
+}
+
+/// Benchmark hook (bench/python_bench.py): the seconds of each of `repeats` calls
+/// of the C++ n4sid on the same data and options as sysid.n4sid, the data already
+/// in an IoData (a C++ caller's starting point), so the Python call's overhead can
+/// be measured in one process against the same library build.
+std::vector<double> time_n4sid(const SampleArray& u, const SampleArray& y, double Ts, int order, int horizon,
+                               const std::string& method, int repeats) {
+  N4sidOptions options;
+  options.weighting = weighting_from_name(method);
+  options.order = order;
+  options.horizon = horizon;
+  const IoData data = io_data(u, y, Ts, {}, {});
+  std::vector<double> seconds;
+  nb::gil_scoped_release release;
+  for (int r = 0; r < repeats; ++r) {
+    IoData copy = data;  // n4sid takes its data by value; the copy is not timed
+    const auto start = std::chrono::steady_clock::now();
+    const N4sidResult result = n4sid(std::move(copy), options);
+    seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+  return seconds;
+}
+
+}  // namespace
+
+void bind_subspace(nb::module_& m) {
+  m.def("n4sid", &identify_subspace, nb::arg("u"), nb::arg("y"), nb::arg("Ts"), nb::kw_only(),
+        nb::arg("order") = nb::none(), nb::arg("method") = "n4sid", nb::arg("horizon") = nb::none(),
+        nb::arg("max_order") = nb::none(), nb::arg("order_rule") = to_string(N4sidOptions{}.order_rule),
+        nb::arg("enforce_stability") = false, nb::arg("allow_unstable") = false, nb::arg("band_limit_hz") = nb::none(),
+        nb::arg("band_limit_order") = N4sidOptions{}.band_limit_order, nb::arg("decimation") = nb::none(),
+        nb::arg("hankel") = "auto", nb::arg("inputs") = std::vector<std::string>{},
+        nb::arg("outputs") = std::vector<std::string>{},
+        "Subspace identification of a state-space model in innovation form from one record.\n\n"
+        "u: samples x inputs (1-D for one input); y: samples x outputs; Ts: sample time [s].\n"
+        "order: a number, or None/'auto' for the order_rule's choice (at most max_order).\n"
+        "method: 'n4sid', 'moesp' or 'cva' (the weighting). horizon: block rows (None: automatic,\n"
+        "long enough for the slowest mode). enforce_stability: A from the zero-padded shift (always stable).\n"
+        "allow_unstable: keep an unstable least-squares A. band_limit_hz: low-pass the data and put the\n"
+        "filter in series with the model (the Par2 remedy). decimation: None (automatic), 1 (none) or a factor.\n"
+        "hankel: 'auto', 'qr', 'cholesky', 'cholesky_double_double'. inputs/outputs: channel names.\n"
+        "Returns a Model with K, x0, offsets and provenance (order rule, horizon, fit, singular values ...),\n"
+        "the very model file `sysid n4sid` writes for the same data and options. Warnings (for example a\n"
+        "poorly excited band) are issued as RuntimeWarning.");
+  m.def("_time_n4sid", &time_n4sid, nb::arg("u"), nb::arg("y"), nb::arg("Ts"), nb::arg("order"), nb::arg("horizon"),
+        nb::arg("method"), nb::arg("repeats"),
+        "Benchmark hook: seconds of each C++ n4sid call on the same data (bench/python_bench.py).");
+}
+
+}  // namespace sysid::python

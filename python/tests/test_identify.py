@@ -1,0 +1,109 @@
+"""Every identification method from Python gives the very model the command line
+writes for the same log and options (the same library, the same model file)."""
+
+import json
+
+import numpy as np
+import pytest
+
+import sysid
+
+
+def without_data(text):
+    """A model or Markov file's content without the keys only the command line knows
+    (the log's file name and the validation label)."""
+    content = json.loads(text)
+    for key in ("data", "validation"):
+        content.get("provenance", {}).pop(key, None)
+    return content
+
+
+@pytest.fixture(scope="module")
+def par2(data_dir):
+    return sysid.read_log(str(data_dir / "par2_gu.csv"), ["u"], ["y"])
+
+
+@pytest.fixture(scope="module")
+def par2_gw(data_dir):
+    return sysid.read_log(str(data_dir / "par2_gw.csv"), [], ["y"])
+
+
+def cli_model(sysid_cli, tmp_path, verb, log, *options):
+    path = tmp_path / f"{verb}.json"
+    sysid_cli(verb, log, *options, "--out", path)
+    return path.read_text()
+
+
+@pytest.mark.parametrize("method", ["n4sid", "moesp", "cva"])
+def test_subspace_methods_equal_the_command_line(method, par2, data_dir, sysid_cli, tmp_path):
+    u, y, Ts = par2
+    cli = cli_model(sysid_cli, tmp_path, "n4sid", data_dir / "par2_gu.csv", "--inputs", "u", "--outputs", "y",
+                    "--method", method, "--order", "10")
+    with pytest.warns(RuntimeWarning):  # the Par2 chirp excites 0..100 Hz of 1 kHz: the tool says so
+        model = sysid.n4sid(u, y, Ts, order=10, method=method, inputs=["u"], outputs=["y"])
+    assert without_data(model.to_json()) == without_data(cli)
+    assert model.provenance["method"] == method
+
+
+def test_the_automatic_order_equals_the_command_line(par2, data_dir, sysid_cli, tmp_path):
+    u, y, Ts = par2
+    cli = cli_model(sysid_cli, tmp_path, "n4sid", data_dir / "par2_gu.csv", "--inputs", "u", "--outputs", "y")
+    with pytest.warns(RuntimeWarning):
+        model = sysid.n4sid(u, y, Ts, inputs=["u"], outputs=["y"])
+    assert without_data(model.to_json()) == without_data(cli)
+    assert model.provenance["order_rule"] == json.loads(cli)["provenance"]["order_rule"]
+
+
+@pytest.mark.parametrize("verb, python_options, cli_options", [
+    ("arx", dict(na=6, nb=6, nk=1), ["--na", "6", "--nb", "6"]),
+    ("armax", dict(na=4, nb=4, nc=2), ["--na", "4", "--nb", "4", "--nc", "2"]),
+    ("oe", dict(nb=4, nf=4), ["--nb", "4", "--nf", "4"]),
+])
+def test_polynomial_models_equal_the_command_line(verb, python_options, cli_options, par2, data_dir, sysid_cli, tmp_path):
+    u, y, Ts = par2
+    cli = cli_model(sysid_cli, tmp_path, verb, data_dir / "par2_gu.csv", "--inputs", "u", "--outputs", "y", *cli_options)
+    model = getattr(sysid, verb)(u, y, Ts, inputs=["u"], outputs=["y"], **python_options)
+    assert model.type == "polynomial"
+    assert without_data(model.to_json()) == without_data(cli)
+
+
+@pytest.mark.parametrize("method", ["ls", "burg", "myw"])
+def test_time_series_models_equal_the_command_line(method, par2_gw, data_dir, sysid_cli, tmp_path):
+    _, w, Ts = par2_gw
+    cli = cli_model(sysid_cli, tmp_path, "ar", data_dir / "par2_gw.csv", "--outputs", "y", "--na", "8", "--method", method)
+    model = sysid.ar(w, Ts, na=8, method=method, outputs=["y"])
+    assert without_data(model.to_json()) == without_data(cli)
+    arma = sysid.arma(w, Ts, na=4, nc=2, outputs=["y"])
+    assert arma.extra["structure"] == "arma" and arma.inputs == []
+
+
+def test_okid_era_and_lms_equal_the_command_line(par2, data_dir, sysid_cli, tmp_path):
+    u, y, Ts = par2
+    log = data_dir / "par2_gu.csv"
+    okid_file, lms_file = tmp_path / "okid.json", tmp_path / "lms.json"
+    sysid_cli("okid", log, "--inputs", "u", "--outputs", "y", "--observer-order", "30", "--out", okid_file)
+    sysid_cli("lms", log, "--inputs", "u", "--outputs", "y", "--taps", "200", "--steps", "2", "--out", lms_file)
+    with pytest.warns(RuntimeWarning):
+        markov = sysid.okid(u, y, Ts, observer_order=30, inputs=["u"], outputs=["y"])
+    np.testing.assert_array_equal(markov.h, sysid.read_markov(str(okid_file)).h)
+    assert markov.h.shape == (121, 1, 1)
+    with pytest.warns(RuntimeWarning):
+        fir = sysid.lms(u, y, Ts, taps=200, steps=2, inputs=["u"], outputs=["y"])
+    np.testing.assert_array_equal(fir.h, sysid.read_markov(str(lms_file)).h)
+    era_cli = cli_model(sysid_cli, tmp_path, "era", okid_file, "--order", "10")
+    model = sysid.era(sysid.read_markov(str(okid_file)), order=10)
+    expected = json.loads(era_cli)
+    assert np.array_equal(model.A, np.array(expected["A"])) and model.provenance["order"] == 10
+    # a Markov written from Python is the command line's file
+    markov.write(str(tmp_path / "again.json"))
+    np.testing.assert_array_equal(sysid.read_markov(str(tmp_path / "again.json")).h, markov.h)
+
+
+def test_prediction_error_failures_are_numerical_errors(par2):
+    u, y, Ts = par2
+    with pytest.raises(sysid.NumericalError, match="did not converge"):
+        sysid.armax(u, y, Ts, na=10, nb=10, nc=10, max_iterations=1)
+    model = sysid.armax(u, y, Ts, na=10, nb=10, nc=10, max_iterations=1, allow_unconverged=True)
+    assert model.provenance["converged"] is False
+    with pytest.raises(ValueError, match="one per input"):
+        sysid.arx(u, y, Ts, na=2, nb=[2, 2])
