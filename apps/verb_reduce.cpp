@@ -4,6 +4,7 @@
 #include <sysid/config.hpp>
 #include <sysid/fem/modal_model.hpp>
 #include <sysid/io/atomic_file.hpp>
+#include <sysid/io/fem_modal_model_file.hpp>
 #include <sysid/io/fem_model_file.hpp>
 #include <sysid/io/model_json.hpp>
 #include <sysid/io/reduced_model_file.hpp>
@@ -157,17 +158,8 @@ void run_fem_reduce(const ReduceArgs& a) {
               << std::right << "  " << (std::isnan(m.damping_ratios(i)) ? std::string("rigid body") : fmt(m.damping_ratios(i), 4))
               << "\n";
   for (const auto& w : r.warnings) warn(verb, w);
-  ModelFile out;
-  out.model = r.model;
-  out.provenance["method"] = "fem-modal";
+  ModelFile out = fem_modal_model_file(model, r, options);
   out.provenance["source"] = a.fem_path;
-  out.provenance["dofs"] = model.dofs();
-  out.provenance["modes"] = a.modes;
-  out.provenance["static_correction"] = a.static_correction;
-  if (a.ts > 0.0) out.provenance["hold"] = hold == Hold::foh ? "foh" : "zoh";
-  out.provenance["natural_frequencies_hz"] = std::vector<double>(m.natural_frequencies_hz.data(),
-                                                                 m.natural_frequencies_hz.data() + m.natural_frequencies_hz.size());
-  out.provenance["sysid_version"] = SYSID_VERSION_STRING;
   write_model_json(a.out, out);
   note(verb, "wrote " + a.out);
 }

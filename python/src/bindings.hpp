@@ -63,5 +63,6 @@ void bind_reduce(nb::module_& m);
 void bind_spectral(nb::module_& m);
 void bind_validate(nb::module_& m);
 void bind_diagnose(nb::module_& m);
+void bind_fem(nb::module_& m);
 
 }  // namespace sysid::python

@@ -84,4 +84,5 @@ NB_MODULE(_sysid, m) {
   bind_spectral(m);
   bind_validate(m);
   bind_diagnose(m);
+  bind_fem(m);
 }

@@ -21,6 +21,7 @@ Long computations release the GIL.
 
 from ._sysid import (
     DataError,
+    FemModel,
     Markov,
     Model,
     NumericalError,
@@ -32,6 +33,9 @@ from ._sysid import (
     compare,
     diagnose,
     era,
+    fem_frf,
+    fem_modes,
+    fem_reduce,
     filter,
     fit_percent,
     frf,
@@ -42,6 +46,7 @@ from ._sysid import (
     oe,
     okid,
     psd,
+    read_fem,
     read_log,
     read_markov,
     read_model,
@@ -61,7 +66,7 @@ def cva(u, y, Ts, **options):
 
 
 __all__ = [
-    "DataError", "Markov", "Model", "NumericalError", "__version__", "ar", "arma", "armax", "arx", "compare",
-    "cva", "diagnose", "era", "filter", "fit_percent", "frf", "hsv", "lms", "model_from_json", "moesp", "n4sid",
-    "oe", "okid", "psd", "read_log", "read_markov", "read_model", "reduce", "resid",
+    "DataError", "FemModel", "Markov", "Model", "NumericalError", "__version__", "ar", "arma", "armax", "arx", "compare",
+    "cva", "diagnose", "era", "fem_frf", "fem_modes", "fem_reduce", "filter", "fit_percent", "frf", "hsv", "lms", "model_from_json", "moesp", "n4sid",
+    "oe", "okid", "psd", "read_fem", "read_log", "read_markov", "read_model", "reduce", "resid",
 ]
