@@ -14,7 +14,7 @@ def test_the_readme_example_runs(data_dir, tmp_path):
     text = README.read_text()
     start = text.index("```python\nimport control, sysid")
     code = text[start + len("```python\n"):text.index("```", start + 10)]
-    code = code.replace("build/ci/data", str(data_dir))
+    code = code.replace("build/release/data", str(data_dir))
     cwd = os.getcwd()
     os.chdir(tmp_path)
     try:
