@@ -72,7 +72,8 @@ int main(int argc, char** argv) {
              sysid::cli::register_armax(app), sysid::cli::register_arma(app), sysid::cli::register_oe(app),
              sysid::cli::register_assemble(app), sysid::cli::register_hsv(app), sysid::cli::register_reduce(app),
              sysid::cli::register_lms(app), sysid::cli::register_okid(app), sysid::cli::register_era(app),
-             sysid::cli::register_diagnose(app), sysid::cli::register_check(app)};
+             sysid::cli::register_diagnose(app), sysid::cli::register_check(app),
+             sysid::cli::register_export(app)};
     // Every verb that writes files gets --force; without it an existing output is
     // refused before any work (claim_outputs in cli_common.hpp).
     for (const auto& verb : verbs)

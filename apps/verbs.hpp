@@ -36,5 +36,6 @@ Verb register_okid(CLI::App& app);
 Verb register_era(CLI::App& app);
 Verb register_diagnose(CLI::App& app);
 Verb register_check(CLI::App& app);
+Verb register_export(CLI::App& app);
 
 }  // namespace sysid::cli

@@ -9,6 +9,7 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libsuitesparse-dev libspectra-dev libnlopt-cxx-dev libcli11-dev
   nlohmann-json3-dev libfast-float-dev googletest libgtest-dev libbenchmark-dev
+  libmatio-dev  # MATLAB files out (sysid export --mat)
   gnuplot-nox
   python3  # scripts/check-layering.py
   python3-dev python3-venv  # the Python package (python/, pyproject.toml)

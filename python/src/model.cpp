@@ -6,6 +6,7 @@
 #include <sysid/core/simulate.hpp>
 #include <sysid/diagnose/augmented_model.hpp>
 #include <sysid/io/augmented_model_file.hpp>
+#include <sysid/io/mat_file.hpp>
 #include <sysid/io/model_json.hpp>
 
 #include <nanobind/stl/complex.h>
@@ -148,6 +149,11 @@ void bind_model(nb::module_& m) {
            "the model file's text, byte for byte what the command line writes")
       .def("write", [](const ModelFile& f, const std::string& path) { write_model_json(path, f); }, nb::arg("path"),
            "write the model file (atomically: a failed write leaves no half-written file)")
+      .def(
+          "write_mat", [](const ModelFile& f, const std::string& path) { write_mat_file(path, model_mat_variables(f)); },
+          nb::arg("path"),
+          "write the model as MATLAB variables (MAT v5: A B C D Ts, K x0 InputName OutputName where present), the\n"
+          "file `sysid export --mat` writes")
       .def("to_control", &to_control, "a control.StateSpace (python-control) with the same matrices, Ts and channel names")
       .def("__repr__", &model_repr);
 

@@ -98,3 +98,18 @@ def test_a_bad_model_file_is_a_data_error_with_its_line(tmp_path):
     with pytest.raises(sysid.DataError, match=r"bad.json:3:"):
         sysid.read_model(str(bad))
     assert issubclass(sysid.DataError, ValueError)
+
+
+def test_write_mat_is_what_sysid_export_writes_and_scipy_reads(par2_model, sysid_cli, tmp_path):
+    io = pytest.importorskip("scipy.io")
+    model = sysid.read_model(str(par2_model))
+    model.write_mat(str(tmp_path / "python.mat"))
+    sysid_cli("export", par2_model, "--mat", tmp_path / "cli.mat")
+    assert (tmp_path / "python.mat").read_bytes()[128:] == (tmp_path / "cli.mat").read_bytes()[128:]  # after the dated header
+    variables = io.loadmat(str(tmp_path / "python.mat"))
+    np.testing.assert_array_equal(variables["A"], model.A)
+    np.testing.assert_array_equal(variables["B"], model.B)
+    np.testing.assert_array_equal(variables["D"], model.D)
+    assert variables["Ts"][0, 0] == model.Ts
+    assert [str(name[0]) for name in variables["InputName"][:, 0]] == model.inputs
+    assert [str(name[0]) for name in variables["OutputName"][:, 0]] == model.outputs
