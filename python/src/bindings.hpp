@@ -61,6 +61,7 @@ void bind_realization(nb::module_& m);
 void bind_adaptive(nb::module_& m);
 void bind_reduce(nb::module_& m);
 void bind_spectral(nb::module_& m);
+void bind_signal(nb::module_& m);
 void bind_validate(nb::module_& m);
 void bind_diagnose(nb::module_& m);
 void bind_fem(nb::module_& m);

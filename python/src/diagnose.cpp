@@ -2,6 +2,7 @@
 // the simulation left out, and the augmented model (`sysid diagnose`; the report
 // dict is the JSON report of DESIGN.md "diagnose: the report contract").
 #include <sysid/core/discretize.hpp>
+#include <sysid/diagnose/data_check.hpp>
 #include <sysid/diagnose/diagnose.hpp>
 #include <sysid/io/augmented_model_file.hpp>
 
@@ -53,9 +54,66 @@ std::pair<nb::object, ModelFile> run_diagnose(const ModelFile& nominal_file, con
   return {to_python(j), augmented_model_to_file(report.augmented, provenance)};
 }
 
+nb::dict channel_dict(const ChannelCheck& c, bool input) {
+  nb::dict d;
+  d["name"] = c.name;
+  d["mean"] = c.mean;
+  d["std"] = c.std;
+  d["offset_ratio"] = c.offset_ratio;
+  d["trend_ratio"] = c.trend_ratio;
+  d["clipped_share"] = c.clipped_share;
+  if (input) {
+    d["excitation_order"] = c.excitation_order;
+    d["excitation_singular_values"] = c.excitation_singular_values;
+  } else {
+    d["snr_db"] = c.snr_db;
+  }
+  return d;
+}
+
+/// The pre-flight check of `sysid check` (diagnose/data_check.hpp) as a dict.
+nb::dict check(const std::optional<SampleArray>& u, const SampleArray& y, double Ts, std::optional<Eigen::VectorXd> time,
+               Eigen::Index max_order, const std::vector<std::string>& inputs, const std::vector<std::string>& outputs) {
+  IoData data = io_data(u, y, Ts, inputs, outputs);
+  DataCheckOptions o;
+  o.max_excitation_order = max_order;
+  DataCheckResult r;
+  {
+    nb::gil_scoped_release release;
+    r = check_data(data, time ? *time : Eigen::VectorXd(), o);
+  }
+  nb::dict out;
+  nb::list in, outs, feedback;
+  for (const ChannelCheck& c : r.inputs) in.append(channel_dict(c, true));
+  for (const ChannelCheck& c : r.outputs) outs.append(channel_dict(c, false));
+  for (const FeedbackCheck& f : r.feedback) {
+    nb::dict d;
+    d["input"] = f.input;
+    d["output"] = f.output;
+    d["largest_correlation"] = f.largest_correlation;
+    d["at_lag"] = f.at_lag;
+    d["bound"] = f.bound;
+    d["likely"] = f.likely;
+    feedback.append(d);
+  }
+  out["samples"] = r.samples;
+  out["inputs"] = in;
+  out["outputs"] = outs;
+  out["feedback"] = feedback;
+  out["findings"] = nb::cast(r.findings);
+  out["report"] = r.report();
+  return out;
+}
+
 }  // namespace
 
 void bind_diagnose(nb::module_& m) {
+  m.def("check", &check, nb::arg("u"), nb::arg("y"), nb::arg("Ts"), nb::kw_only(), nb::arg("time") = nb::none(),
+        nb::arg("max_order") = DataCheckOptions{}.max_excitation_order, nb::arg("inputs") = std::vector<std::string>{},
+        nb::arg("outputs") = std::vector<std::string>{},
+        "The pre-flight check of `sysid check`: per input the excitation order, per output an SNR estimate, offsets,\n"
+        "trends, clipping, the sampling (when `time`, the time stamps in seconds, is given) and feedback; `findings`\n"
+        "lists each problem with its consequence, most serious first, and `report` is the printed text.");
   const DiagnoseOptions defaults;
   m.def("diagnose", &run_diagnose, nb::arg("nominal"), nb::arg("u"), nb::arg("y"), nb::arg("Ts"), nb::kw_only(),
         nb::arg("max_findings") = defaults.max_findings, nb::arg("significance") = defaults.significance,

@@ -82,6 +82,7 @@ NB_MODULE(_sysid, m) {
   bind_adaptive(m);
   bind_reduce(m);
   bind_spectral(m);
+  bind_signal(m);
   bind_validate(m);
   bind_diagnose(m);
   bind_fem(m);

@@ -1,8 +1,5 @@
-// sysid.frf, sysid.psd and sysid.filter: Welch spectra, H1/H2 frequency responses
-// with coherence and confidence bounds, and Butterworth filtering, as `sysid frf`,
-// `sysid psd` and `sysid filter` compute them.
-#include <sysid/signal/butterworth.hpp>
-#include <sysid/signal/sos_filter.hpp>
+// sysid.frf and sysid.psd: Welch spectra and H1/H2 frequency responses with
+// coherence and confidence bounds, as `sysid frf` and `sysid psd` compute them.
 #include <sysid/spectral/frf.hpp>
 #include <sysid/spectral/welch.hpp>
 #include <sysid/spectral/window.hpp>
@@ -86,21 +83,6 @@ std::pair<Eigen::VectorXd, Eigen::MatrixXd> psd_estimate(const SampleArray& x, d
   return {std::move(r.freq_hz), std::move(r.psd)};
 }
 
-Eigen::MatrixXd butterworth_filter(const SampleArray& x, double Ts, std::optional<double> lowpass,
-                                   std::optional<double> highpass, std::optional<std::pair<double, double>> bandpass,
-                                   int order, bool zero_phase) {
-  if (!(Ts > 0.0)) throw std::invalid_argument("filter: Ts must be > 0");
-  if ((lowpass.has_value() + highpass.has_value() + bandpass.has_value()) != 1)
-    throw std::invalid_argument("filter: give exactly one of lowpass, highpass, bandpass");
-  const double fs = 1.0 / Ts;
-  const SecondOrderSections f = lowpass    ? butterworth(order, BandType::lowpass, *lowpass, 0.0, fs)
-                                : highpass ? butterworth(order, BandType::highpass, *highpass, 0.0, fs)
-                                           : butterworth(order, BandType::bandpass, bandpass->first, bandpass->second, fs);
-  const StridedMap view = sample_view(x, "x");
-  nb::gil_scoped_release release;
-  return zero_phase ? filtfilt(f, view) : sos_filter(f, view);
-}
-
 }  // namespace
 
 void bind_spectral(nb::module_& m) {
@@ -117,12 +99,6 @@ void bind_spectral(nb::module_& m) {
         "One-sided Welch power spectrum of each column of x (`sysid psd`): (freq_hz, psd), psd frequencies x\n"
         "channels in units^2/Hz ('density') or units^2 ('spectrum'). window: 'hann', 'hamming',\n"
         "'blackman-harris', 'flattop', 'rectangular'.");
-  m.def("filter", &butterworth_filter, nb::arg("x"), nb::arg("Ts"), nb::kw_only(), nb::arg("lowpass") = nb::none(),
-        nb::arg("highpass") = nb::none(), nb::arg("bandpass") = nb::none(), nb::arg("order") = 4,
-        nb::arg("zero_phase") = false,
-        "Butterworth filtering of each column of x (`sysid filter`): one of lowpass=Hz, highpass=Hz,\n"
-        "bandpass=(lo, hi); zero_phase runs it forwards and backwards (filtfilt, twice the order in\n"
-        "magnitude, no delay).");
 }
 
 }  // namespace sysid::python

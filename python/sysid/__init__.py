@@ -30,6 +30,8 @@ from ._sysid import (
     arma,
     armax,
     arx,
+    check,
+    chirp,
     compare,
     diagnose,
     era,
@@ -42,9 +44,11 @@ from ._sysid import (
     hsv,
     lms,
     model_from_json,
+    multisine,
     n4sid,
     oe,
     okid,
+    prbs,
     psd,
     read_fem,
     read_log,
@@ -66,7 +70,7 @@ def cva(u, y, Ts, **options):
 
 
 __all__ = [
-    "DataError", "FemModel", "Markov", "Model", "NumericalError", "__version__", "ar", "arma", "armax", "arx", "compare",
-    "cva", "diagnose", "era", "fem_frf", "fem_modes", "fem_reduce", "filter", "fit_percent", "frf", "hsv", "lms", "model_from_json", "moesp", "n4sid",
-    "oe", "okid", "psd", "read_fem", "read_log", "read_markov", "read_model", "reduce", "resid",
+    "DataError", "FemModel", "Markov", "Model", "NumericalError", "__version__", "ar", "arma", "armax", "arx", "check", "chirp", "compare",
+    "cva", "diagnose", "era", "fem_frf", "fem_modes", "fem_reduce", "filter", "fit_percent", "frf", "hsv", "lms", "model_from_json", "moesp", "multisine", "n4sid",
+    "oe", "okid", "prbs", "psd", "read_fem", "read_log", "read_markov", "read_model", "reduce", "resid",
 ]
