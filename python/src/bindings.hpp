@@ -12,6 +12,8 @@
 #include <nlohmann/json.hpp>
 
 #include <Eigen/Dense>
+#include <algorithm>
+#include <complex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -37,6 +39,23 @@ StridedMap sample_view(const SampleArray& a, const char* name);
 /// identification takes the data by value.
 IoData io_data(const std::optional<SampleArray>& u, const SampleArray& y, double Ts,
                const std::vector<std::string>& inputs, const std::vector<std::string>& outputs);
+
+/// A list of equally sized matrices (one per frequency, or per lag) as one
+/// (count, rows, cols) NumPy array that owns its copy.
+template <class Matrix>
+nb::ndarray<nb::numpy, typename Matrix::Scalar, nb::ndim<3>> stack_matrices(const std::vector<Matrix>& matrices) {
+  using Scalar = typename Matrix::Scalar;
+  const std::size_t count = matrices.size();
+  const std::size_t rows = count ? static_cast<std::size_t>(matrices.front().rows()) : 0;
+  const std::size_t cols = count ? static_cast<std::size_t>(matrices.front().cols()) : 0;
+  auto* data = new Scalar[std::max<std::size_t>(count * rows * cols, 1)];
+  for (std::size_t k = 0; k < count; ++k)
+    for (std::size_t i = 0; i < rows; ++i)
+      for (std::size_t j = 0; j < cols; ++j)
+        data[(k * rows + i) * cols + j] = matrices[k](static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+  nb::capsule owner(data, [](void* p) noexcept { delete[] static_cast<Scalar*>(p); });
+  return nb::ndarray<nb::numpy, Scalar, nb::ndim<3>>(data, {count, rows, cols}, owner);
+}
 
 /// nlohmann::json <-> Python objects (dict, list, float, int, str, bool, None),
 /// through the json module so that numbers keep their exact value.

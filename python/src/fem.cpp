@@ -14,18 +14,6 @@ namespace sysid::python {
 
 namespace {
 
-/// (frequencies, outputs, inputs) complex array.
-nb::ndarray<nb::numpy, std::complex<double>, nb::ndim<3>> stack_response(const std::vector<Eigen::MatrixXcd>& H) {
-  const std::size_t count = H.size(), l = count ? static_cast<std::size_t>(H.front().rows()) : 0,
-                    m = count ? static_cast<std::size_t>(H.front().cols()) : 0;
-  auto* data = new std::complex<double>[std::max<std::size_t>(count * l * m, 1)];
-  for (std::size_t k = 0; k < count; ++k)
-    for (std::size_t i = 0; i < l; ++i)
-      for (std::size_t j = 0; j < m; ++j) data[(k * l + i) * m + j] = H[k](static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
-  nb::capsule owner(data, [](void* p) noexcept { delete[] static_cast<std::complex<double>*>(p); });
-  return nb::ndarray<nb::numpy, std::complex<double>, nb::ndim<3>>(data, {count, l, m}, owner);
-}
-
 Hold hold_from_name(const std::string& name) {
   if (name == "zoh") return Hold::zoh;
   if (name == "foh") return Hold::foh;
@@ -77,7 +65,7 @@ nb::dict frf_of(const fem::SecondOrderModel& model, const Eigen::VectorXd& freq_
   issue_warnings(r.warnings);
   nb::dict out;
   out["freq_hz"] = r.freq_hz;
-  out["H"] = stack_response(r.H);
+  out["H"] = stack_matrices(r.H);
   out["inputs"] = nb::cast(r.input_names);
   out["outputs"] = nb::cast(r.output_names);
   out["method"] = fem::sparse_frf_method_name(r.method);

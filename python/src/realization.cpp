@@ -17,21 +17,6 @@ namespace sysid::python {
 
 namespace {
 
-using MarkovArray = nb::ndarray<double, nb::numpy, nb::ndim<3>>;
-
-/// h as a (count, outputs, inputs) array, h[0] = D.
-MarkovArray markov_array(const MarkovParameters& markov) {
-  const std::size_t count = markov.h.size(), l = static_cast<std::size_t>(markov.outputs()),
-                    m = static_cast<std::size_t>(markov.inputs());
-  auto* data = new double[count * l * m];
-  for (std::size_t k = 0; k < count; ++k)
-    for (std::size_t i = 0; i < l; ++i)
-      for (std::size_t j = 0; j < m; ++j)
-        data[(k * l + i) * m + j] = markov.h[k](static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
-  nb::capsule owner(data, [](void* p) noexcept { delete[] static_cast<double*>(p); });
-  return MarkovArray(data, {count, l, m}, owner);
-}
-
 MarkovFile markov_from_array(const nb::ndarray<const double, nb::ndim<3>, nb::device::cpu>& h, double Ts) {
   std::vector<Eigen::MatrixXd> fir;
   for (std::size_t k = 0; k < h.shape(0); ++k) {
@@ -99,7 +84,7 @@ void bind_realization(nb::module_& m) {
             new (self) MarkovFile(markov_from_array(h, Ts));
           },
           nb::arg("h"), nb::arg("Ts"), "From an array (count, outputs, inputs), h[0] = D.")
-      .def_prop_ro("h", [](const MarkovFile& f) { return markov_array(f.markov); }, nb::rv_policy::move,
+      .def_prop_ro("h", [](const MarkovFile& f) { return stack_matrices(f.markov.h); }, nb::rv_policy::move,
                    "(count, outputs, inputs) array, a copy")
       .def_prop_ro("Ts", [](const MarkovFile& f) { return f.markov.Ts; })
       .def_prop_ro("inputs", [](const MarkovFile& f) {

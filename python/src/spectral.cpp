@@ -24,22 +24,6 @@ WelchOptions welch_options(Eigen::Index nfft, double overlap, const std::string&
   return o;
 }
 
-/// A per-frequency list of l x m matrices as one (frequencies, l, m) array.
-template <class Matrix>
-nb::ndarray<nb::numpy, typename Matrix::Scalar, nb::ndim<3>> stack(const std::vector<Matrix>& per_frequency) {
-  using Scalar = typename Matrix::Scalar;
-  const std::size_t count = per_frequency.size();
-  const std::size_t l = count ? static_cast<std::size_t>(per_frequency.front().rows()) : 0;
-  const std::size_t m = count ? static_cast<std::size_t>(per_frequency.front().cols()) : 0;
-  auto* data = new Scalar[std::max<std::size_t>(count * l * m, 1)];
-  for (std::size_t k = 0; k < count; ++k)
-    for (std::size_t i = 0; i < l; ++i)
-      for (std::size_t j = 0; j < m; ++j)
-        data[(k * l + i) * m + j] = per_frequency[k](static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
-  nb::capsule owner(data, [](void* p) noexcept { delete[] static_cast<Scalar*>(p); });
-  return nb::ndarray<nb::numpy, Scalar, nb::ndim<3>>(data, {count, l, m}, owner);
-}
-
 nb::dict frf_estimate(const SampleArray& u, const SampleArray& y, double Ts, Eigen::Index nfft, double overlap,
                       const std::string& window, const std::string& detrend, const std::string& estimator, double confidence) {
   IoData data = io_data(u, y, Ts, {}, {});
@@ -55,11 +39,11 @@ nb::dict frf_estimate(const SampleArray& u, const SampleArray& y, double Ts, Eig
   }
   nb::dict out;
   out["freq_hz"] = r.freq_hz;
-  out["H"] = stack(r.H);
-  out["coherence"] = stack(r.coherence);
-  out["magnitude_lower"] = stack(r.magnitude_lower);
-  out["magnitude_upper"] = stack(r.magnitude_upper);
-  out["phase_halfwidth_rad"] = stack(r.phase_halfwidth_rad);
+  out["H"] = stack_matrices(r.H);
+  out["coherence"] = stack_matrices(r.coherence);
+  out["magnitude_lower"] = stack_matrices(r.magnitude_lower);
+  out["magnitude_upper"] = stack_matrices(r.magnitude_upper);
+  out["phase_halfwidth_rad"] = stack_matrices(r.phase_halfwidth_rad);
   out["input_psd"] = r.input_psd;
   out["output_psd"] = r.output_psd;
   out["nfft"] = r.nfft;
