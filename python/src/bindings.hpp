@@ -6,6 +6,7 @@
 #include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
+#include <nanobind/stl/filesystem.h>
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
@@ -14,6 +15,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <complex>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -24,6 +26,9 @@
 namespace sysid::python {
 
 namespace nb = nanobind;
+
+/// File names from Python: a str or any os.PathLike (pathlib.Path).
+using Path = std::filesystem::path;
 
 /// A NumPy array of samples (rows) as given: 1-D is one channel, 2-D is samples x
 /// channels, in any memory layout and any real dtype (converted to float64).

@@ -26,7 +26,7 @@ char layout_character(const std::optional<std::string>& text, const char* what) 
 }
 
 std::tuple<Eigen::MatrixXd, Eigen::MatrixXd, double> read_log_arrays(
-    const std::string& path, const std::vector<std::string>& inputs, const std::vector<std::string>& outputs,
+    const Path& path, const std::vector<std::string>& inputs, const std::vector<std::string>& outputs,
     std::optional<double> ts, const std::string& time_column, const std::string& nan_policy,
     const std::optional<std::string>& time_unit, const std::optional<std::string>& delimiter,
     const std::optional<std::string>& decimal) {
@@ -46,7 +46,7 @@ std::tuple<Eigen::MatrixXd, Eigen::MatrixXd, double> read_log_arrays(
   IoData data;
   {
     nb::gil_scoped_release release;
-    data = log_from_table(read_csv(path, format), options);
+    data = log_from_table(read_csv(path.string(), format), options);
   }
   Experiment& e = data.experiments.front();
   return {std::move(e.u), std::move(e.y), data.Ts};

@@ -93,7 +93,7 @@ void bind_fem(nb::module_& m) {
         return "<sysid.FemModel: " + std::to_string(f.dofs()) + " DOFs, " + std::to_string(f.inputs.size()) + " input(s), " +
                std::to_string(f.outputs.size()) + " output(s)>";
       });
-  m.def("read_fem", &read_fem_model, nb::arg("path"), "An FE model file (JSON naming its .mtx matrices) as a FemModel.");
+  m.def("read_fem", [](const Path& path) { return read_fem_model(path.string()); }, nb::arg("path"), "An FE model file (JSON naming its .mtx matrices) as a FemModel.");
   m.def("fem_modes", &modes_of, nb::arg("fem"), nb::kw_only(), nb::arg("modes") = fem::ModalAnalysisOptions{}.modes,
         "The lowest modes (shift-invert Lanczos on CHOLMOD): a dict with freq_hz, damping, mode_shapes\n"
         "(dofs x modes, mass-normalised), rigid_body_modes and max_relative_residual.");

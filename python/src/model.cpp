@@ -147,17 +147,17 @@ void bind_model(nb::module_& m) {
           "one dict per mode (freq_hz, damping ratio, pole, complex_pair, stable), by frequency, as `sysid show` lists them")
       .def("to_json", [](const ModelFile& f) { return model_to_json_string(f); },
            "the model file's text, byte for byte what the command line writes")
-      .def("write", [](const ModelFile& f, const std::string& path) { write_model_json(path, f); }, nb::arg("path"),
+      .def("write", [](const ModelFile& f, const Path& path) { write_model_json(path.string(), f); }, nb::arg("path"),
            "write the model file (atomically: a failed write leaves no half-written file)")
       .def(
-          "write_mat", [](const ModelFile& f, const std::string& path) { write_mat_file(path, model_mat_variables(f)); },
+          "write_mat", [](const ModelFile& f, const Path& path) { write_mat_file(path.string(), model_mat_variables(f)); },
           nb::arg("path"),
           "write the model as MATLAB variables (MAT v5: A B C D Ts, K x0 InputName OutputName where present), the\n"
           "file `sysid export --mat` writes")
       .def("to_control", &to_control, "a control.StateSpace (python-control) with the same matrices, Ts and channel names")
       .def("__repr__", &model_repr);
 
-  m.def("read_model", &read_model_json, nb::arg("path"), "A model file (any the command line writes) as a Model.");
+  m.def("read_model", [](const Path& path) { return read_model_json(path.string()); }, nb::arg("path"), "A model file (any the command line writes) as a Model.");
   m.def(
       "model_from_json", [](const std::string& text) { return model_from_json_string(text, "<text>"); }, nb::arg("text"),
       "A Model from a model file's text.");

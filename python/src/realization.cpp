@@ -98,13 +98,13 @@ void bind_realization(nb::module_& m) {
         return names;
       })
       .def_prop_ro("provenance", [](const MarkovFile& f) { return to_python(f.provenance); })
-      .def("write", [](const MarkovFile& f, const std::string& path) { write_markov_file(path, f); }, nb::arg("path"),
+      .def("write", [](const MarkovFile& f, const Path& path) { write_markov_file(path.string(), f); }, nb::arg("path"),
            "write the Markov-parameter file (JSON, type markov) the command line reads")
       .def("__repr__", [](const MarkovFile& f) {
         return "<sysid.Markov: " + std::to_string(f.markov.count()) + " matrices " + std::to_string(f.markov.outputs()) + "x" +
                std::to_string(f.markov.inputs()) + ", Ts " + nlohmann::json(f.markov.Ts).dump() + " s>";
       });
-  m.def("read_markov", &read_markov_file, nb::arg("path"), "A Markov-parameter file (from `sysid lms` or `sysid okid`).");
+  m.def("read_markov", [](const Path& path) { return read_markov_file(path.string()); }, nb::arg("path"), "A Markov-parameter file (from `sysid lms` or `sysid okid`).");
   m.def("okid", &identify_okid, nb::arg("u"), nb::arg("y"), nb::arg("Ts"), nb::kw_only(),
         nb::arg("observer_order") = OkidOptions{}.observer_order, nb::arg("count") = 0,
         nb::arg("inputs") = std::vector<std::string>{}, nb::arg("outputs") = std::vector<std::string>{},

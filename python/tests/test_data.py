@@ -84,3 +84,12 @@ def test_long_computations_release_the_gil(data_dir):
     during = [t for t in ticks if start < t < end]
     assert end - start > 0.02, "the fit is too short to tell"
     assert len(during) >= 3
+
+
+def test_file_names_may_be_paths(data_dir, tmp_path):
+    u, y, Ts = sysid.read_log(data_dir / "par2_gu.csv", ["u"], ["y"])  # a pathlib.Path, not a str
+    model = sysid.arx(u, y, Ts, na=2, nb=2)
+    model.write(tmp_path / "arx.json")
+    assert sysid.read_model(tmp_path / "arx.json").to_json() == model.to_json()
+    model.write_mat(tmp_path / "arx.mat")
+    assert (tmp_path / "arx.mat").exists()
