@@ -4,7 +4,6 @@
 #include <sysid/core/errors.hpp>
 #include <sysid/core/format_number.hpp>
 #include <sysid/io/atomic_file.hpp>
-#include <sysid/io/n4sid_model_file.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -93,9 +92,7 @@ LogOptions make_log_options(const LogArgs& args, std::vector<std::string> inputs
   o.time_column = args.time_column == "none" ? std::string() : args.time_column;
   o.ts = args.ts;
   o.time_unit = selected_time_unit();
-  o.nan_policy = args.nan_policy == "drop"          ? NanPolicy::drop_rows
-                 : args.nan_policy == "interpolate" ? NanPolicy::interpolate
-                                                    : NanPolicy::error;
+  o.nan_policy = nan_policy_from_name(args.nan_policy);
   return o;
 }
 
@@ -129,7 +126,7 @@ void add_hold_option(CLI::App& cmd) {
       ->each([](const std::string&) { g_hold_given = true; });
 }
 
-Hold selected_hold() { return g_hold == "foh" ? Hold::foh : Hold::zoh; }
+Hold selected_hold() { return hold_from_name(g_hold); }
 
 StateSpace model_for_sample_time(const ModelFile& file, double ts, const std::string& model_path, const std::string& verb) {
   if (file.model.is_discrete() && g_hold_given)
@@ -137,32 +134,16 @@ StateSpace model_for_sample_time(const ModelFile& file, double ts, const std::st
   if (!file.model.is_discrete()) {
     note(verb, model_path + " is a continuous-time model: discretised with a " +
                    (selected_hold() == Hold::foh ? "first" : "zero") + "-order hold at Ts = " + fmt(ts) + " s");
-    return c2d(file.model, ts, selected_hold());  // names kept
   }
-  if (std::abs(file.model.Ts - ts) > 1e-6 * file.model.Ts)
-    throw DataError(model_path, 0, 0,
-                    "the model's sample time " + fmt(file.model.Ts, 9) + " s differs from the log's " + fmt(ts, 9) +
-                        " s; a discrete-time model runs only at its own rate");
-  return file.model;
+  return model_at_sample_time(file.model, ts, selected_hold(), model_path);
 }
 
 std::vector<std::string> model_input_names(const ModelFile& file) {
-  std::vector<std::string> names;
-  for (Eigen::Index j = 0; j < file.model.inputs(); ++j) names.push_back(file.model.input_name(j));
-  return names;
+  return file.model.input_names_or_defaults();
 }
 
 std::vector<std::string> model_output_names(const ModelFile& file) {
-  std::vector<std::string> names;
-  for (Eigen::Index i = 0; i < file.model.outputs(); ++i) names.push_back(file.model.output_name(i));
-  return names;
-}
-
-StateSpace named_model(const ModelFile& file) {
-  StateSpace s = file.model;
-  s.input_names = model_input_names(file);
-  s.output_names = model_output_names(file);
-  return s;
+  return file.model.output_names_or_defaults();
 }
 
 std::pair<double, double> parse_range(const std::string& text, const std::string& option_name) {
@@ -239,8 +220,6 @@ void claim_outputs(const std::vector<std::string>& outputs, const std::vector<st
 }
 
 void note(const std::string& verb, const std::string& message) { std::cerr << "sysid " << verb << ": " << message << "\n"; }
-
-nlohmann::json to_json_list(const Eigen::VectorXd& v) { return json_list_or_null(v); }
 
 void add_validation_options(CLI::App& cmd, std::string& validate, std::optional<double>& split) {
   CLI::Option* val =
@@ -332,7 +311,7 @@ WelchOptions welch_options(const WelchArgs& args) {
   o.nfft = args.nfft;
   o.overlap = args.overlap;
   o.window = parse_window(args.window);
-  o.detrend = args.detrend == "none" ? Detrend::none : args.detrend == "linear" ? Detrend::linear : Detrend::mean;
+  o.detrend = detrend_from_name(args.detrend);
   return o;
 }
 

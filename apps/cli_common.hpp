@@ -96,8 +96,6 @@ Hold selected_hold();
 /// The model's channel names: the given list, else the model's names (u1.., y1.. when absent).
 std::vector<std::string> model_input_names(const ModelFile& file);
 std::vector<std::string> model_output_names(const ModelFile& file);
-/// The model file's state space carrying those names (polynomial files included).
-StateSpace named_model(const ModelFile& file);
 
 /// Adds --force (replace existing output files) to a verb that writes files. The
 /// flag is the one process-wide setting claim_outputs() reads: one verb runs per process.
@@ -128,9 +126,6 @@ void warn(const std::string& verb, const std::string& message);
 
 /// "sysid <verb>: <message>" on stderr (progress notes, files written).
 void note(const std::string& verb, const std::string& message);
-
-/// Vector of doubles -> JSON list (NaN written as null: JSON has no NaN).
-nlohmann::json to_json_list(const Eigen::VectorXd& v);
 
 /// The log columns a model runs on: --inputs / --outputs as typed, else the
 /// model's channel names; their number must match the model's (std::invalid_argument).

@@ -250,17 +250,12 @@ void run_n4sid(const N4sidArgs& a) {
                                  all_output_names = estimation.output_names;
 
   N4sidOptions options;
-  options.weighting = a.method == "moesp" ? SubspaceWeighting::moesp
-                      : a.method == "cva" ? SubspaceWeighting::cva
-                                          : SubspaceWeighting::n4sid;
+  options.weighting = subspace_weighting_from_name(a.method);
   options.order = order.fixed;
   options.max_order = a.max_order;
   options.order_rule = order_rule_from_name(a.order_rule);
   options.horizon = a.horizon;
-  options.route = a.hankel == "qr"                       ? HankelRoute::qr
-                  : a.hankel == "cholesky"               ? HankelRoute::cholesky
-                  : a.hankel == "cholesky_double_double" ? HankelRoute::cholesky_double_double
-                                                         : HankelRoute::automatic;
+  options.route = hankel_route_from_name(a.hankel);
   options.enforce_stability = a.enforce_stability;
   options.allow_unstable = a.allow_unstable;
   // --band-limit: the Par2 remedy for gain the data do not determine above the
@@ -299,8 +294,8 @@ void run_n4sid(const N4sidArgs& a) {
     const OrderSweepEntry* best = nullptr;
     for (const auto& e : table) {
       nlohmann::json row = {{"order", e.order},
-                            {"estimation_fit_percent", to_json_list(e.estimation_fit)},
-                            {"validation_fit_percent", to_json_list(e.validation_fit)}};
+                            {"estimation_fit_percent", json_list_or_null(e.estimation_fit)},
+                            {"validation_fit_percent", json_list_or_null(e.validation_fit)}};
       sweep_json.push_back(row);
       if (!e.ok) {
         for (const auto& w : e.warnings) warn(verb, w);
@@ -380,7 +375,7 @@ void run_n4sid(const N4sidArgs& a) {
   nlohmann::json& p = file.provenance;
   p["data"] = a.log_path;
   if (validation) {
-    p["validation_fit_percent"] = to_json_list(validation_fit);
+    p["validation_fit_percent"] = json_list_or_null(validation_fit);
     p["validation"] = validation_label;
   }
   if (order.sweep && !diagram) p["order_sweep"] = sweep_json;

@@ -114,10 +114,7 @@ void run_polynomial(Structure structure, const PolynomialArgs& a) {
   }
   OrderSearchOptions search;
   search.fit.structure = structure;
-  search.fit.ar_method = a.ar_method == "burg"  ? ArMethod::burg
-                         : a.ar_method == "yw"  ? ArMethod::yule_walker
-                         : a.ar_method == "myw" ? ArMethod::modified_yule_walker
-                                                : ArMethod::least_squares;
+  search.fit.ar_method = ar_method_from_name(a.ar_method);
   search.fit.max_iterations = a.max_iterations;
   const std::vector<PolynomialOrders> combos = order_combinations(grid, structure);
   std::ostringstream report;

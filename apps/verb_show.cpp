@@ -149,9 +149,9 @@ void run_show(const ShowArgs& a) {
   out << "inputs (" << sys.inputs() << "): " << join(model_input_names(file)) << "\n";
   out << "outputs (" << sys.outputs() << "): " << join(model_output_names(file)) << "\n";
   if (file.input_offset.size())
-    out << "input offset: " << format_json_value(to_json_list(file.input_offset), d) << "\n";
+    out << "input offset: " << format_json_value(json_list_or_null(file.input_offset), d) << "\n";
   if (file.output_offset.size())
-    out << "output offset: " << format_json_value(to_json_list(file.output_offset), d) << "\n";
+    out << "output offset: " << format_json_value(json_list_or_null(file.output_offset), d) << "\n";
   out << "Kalman gain K: " << (file.K.size() ? "present (k-step prediction possible)" : "absent") << "\n";
 
   const Eigen::VectorXcd p = poles(sys);

@@ -67,10 +67,6 @@ nb::ndarray<nb::numpy, typename Matrix::Scalar, nb::ndim<3>> stack_matrices(cons
 nb::object to_python(const nlohmann::json& value);
 nlohmann::json from_python(const nb::handle& value);
 
-/// The channel names of a model or data set, filled in (u1.., y1..) where absent.
-std::vector<std::string> input_names_of(const StateSpace& model);
-std::vector<std::string> output_names_of(const StateSpace& model);
-
 /// The library's warnings (a poorly excited band, an order decision on a weak
 /// gap ...) as Python RuntimeWarnings, so `warnings` filters and pytest see them.
 /// Call with the GIL held.

@@ -10,13 +10,6 @@ namespace sysid::python {
 
 namespace {
 
-NanPolicy nan_policy_from_name(const std::string& name) {
-  if (name == "error") return NanPolicy::error;
-  if (name == "drop") return NanPolicy::drop_rows;
-  if (name == "interpolate") return NanPolicy::interpolate;
-  throw std::invalid_argument("nan_policy: expected 'error', 'drop' or 'interpolate', found '" + name + "'");
-}
-
 char layout_character(const std::optional<std::string>& text, const char* what) {
   if (!text) return 0;
   if (*text == "tab" || *text == "\t") return '\t';

@@ -8,7 +8,6 @@
 
 #include <nanobind/stl/pair.h>
 
-#include <cmath>
 
 #include "bindings.hpp"
 
@@ -21,12 +20,7 @@ std::pair<nb::object, ModelFile> run_diagnose(const ModelFile& nominal_file, con
                                               std::optional<std::pair<SampleArray, SampleArray>> confirm) {
   if (!(Ts > 0.0)) throw std::invalid_argument("diagnose: Ts must be > 0");
   AugmentedModel nominal = augmented_model_from_file(nominal_file, "nominal");
-  if (!nominal_file.model.is_discrete()) {
-    nominal.nominal = c2d(nominal_file.model, Ts, Hold::zoh);  // names kept, as the command line does
-  } else if (std::abs(nominal_file.model.Ts - Ts) > 1e-6 * nominal_file.model.Ts) {
-    throw DataError("the nominal's sample time " + nlohmann::json(nominal_file.model.Ts).dump() + " s differs from Ts " +
-                    nlohmann::json(Ts).dump() + " s; a discrete-time model runs only at its own rate");
-  }
+  nominal.nominal = model_at_sample_time(nominal_file.model, Ts, Hold::zoh, "nominal");  // as the command line does
   DiagnoseOptions o;
   o.max_findings = max_findings;
   o.significance = significance;

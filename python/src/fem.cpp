@@ -14,12 +14,6 @@ namespace sysid::python {
 
 namespace {
 
-Hold hold_from_name(const std::string& name) {
-  if (name == "zoh") return Hold::zoh;
-  if (name == "foh") return Hold::foh;
-  throw std::invalid_argument("hold: expected 'zoh' or 'foh', found '" + name + "'");
-}
-
 nb::dict modes_of(const fem::SecondOrderModel& model, int modes) {
   fem::ModalAnalysisOptions options;
   options.modes = modes;

@@ -64,8 +64,8 @@ nb::object to_control(const ModelFile& file) {
     throw nb::import_error("Model.to_control() needs python-control: pip install control");
   }
   const StateSpace& s = file.model;
-  return control.attr("ss")(s.A, s.B, s.C, s.D, s.Ts, nb::arg("inputs") = input_names_of(s),
-                            nb::arg("outputs") = output_names_of(s));
+  return control.attr("ss")(s.A, s.B, s.C, s.D, s.Ts, nb::arg("inputs") = s.input_names_or_defaults(),
+                            nb::arg("outputs") = s.output_names_or_defaults());
 }
 
 std::string model_repr(const ModelFile& file) {
@@ -117,8 +117,8 @@ void bind_model(nb::module_& m) {
                    "input means removed before identification, or None")
       .def_prop_ro("output_offset", [](const ModelFile& f) { return optional_vector(f.output_offset); },
                    "output means removed before identification, or None")
-      .def_prop_ro("inputs", [](const ModelFile& f) { return input_names_of(f.model); }, "input names (u1.. when unnamed)")
-      .def_prop_ro("outputs", [](const ModelFile& f) { return output_names_of(f.model); }, "output names (y1.. when unnamed)")
+      .def_prop_ro("inputs", [](const ModelFile& f) { return f.model.input_names_or_defaults(); }, "input names (u1.. when unnamed)")
+      .def_prop_ro("outputs", [](const ModelFile& f) { return f.model.output_names_or_defaults(); }, "output names (y1.. when unnamed)")
       .def_prop_ro("order", [](const ModelFile& f) { return f.model.order(); }, "number of states")
       .def_prop_ro("provenance", [](const ModelFile& f) { return to_python(f.provenance); },
                    "how the model was made (method, order, fits ...): a dict, a copy")

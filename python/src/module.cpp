@@ -43,18 +43,6 @@ nlohmann::json from_python(const nb::handle& value) {
   return nlohmann::json::parse(text);
 }
 
-std::vector<std::string> input_names_of(const StateSpace& model) {
-  std::vector<std::string> names;
-  for (Eigen::Index j = 0; j < model.inputs(); ++j) names.push_back(model.input_name(j));
-  return names;
-}
-
-std::vector<std::string> output_names_of(const StateSpace& model) {
-  std::vector<std::string> names;
-  for (Eigen::Index i = 0; i < model.outputs(); ++i) names.push_back(model.output_name(i));
-  return names;
-}
-
 void issue_warnings(const std::vector<std::string>& warnings) {
   for (const std::string& w : warnings)
     if (PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1) != 0) throw nb::python_error();

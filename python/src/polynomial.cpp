@@ -26,14 +26,6 @@ std::vector<int> per_input(const PerInput& value, Eigen::Index inputs, const cha
   return list;
 }
 
-ArMethod ar_method_from_name(const std::string& name) {
-  if (name == "ls") return ArMethod::least_squares;
-  if (name == "yw") return ArMethod::yule_walker;
-  if (name == "burg") return ArMethod::burg;
-  if (name == "myw") return ArMethod::modified_yule_walker;
-  throw std::invalid_argument("method: expected 'ls', 'yw', 'burg' or 'myw', found '" + name + "'");
-}
-
 /// Fits `options` on the data and returns the model file; a minimisation that did
 /// not converge raises NumericalError unless `allow_unconverged` (the command
 /// line's --write-unconverged). Warnings are RuntimeWarnings.

@@ -17,10 +17,7 @@ WelchOptions welch_options(Eigen::Index nfft, double overlap, const std::string&
   o.nfft = nfft;
   o.overlap = overlap;
   o.window = parse_window(window);
-  if (detrend == "none") o.detrend = Detrend::none;
-  else if (detrend == "mean") o.detrend = Detrend::mean;
-  else if (detrend == "linear") o.detrend = Detrend::linear;
-  else throw std::invalid_argument("detrend: expected 'none', 'mean' or 'linear', found '" + detrend + "'");
+  o.detrend = detrend_from_name(detrend);
   return o;
 }
 

@@ -14,19 +14,6 @@ namespace sysid::python {
 
 namespace {
 
-SubspaceWeighting weighting_from_name(const std::string& method) {
-  if (method == "n4sid") return SubspaceWeighting::n4sid;
-  if (method == "moesp") return SubspaceWeighting::moesp;
-  if (method == "cva") return SubspaceWeighting::cva;
-  throw std::invalid_argument("method: expected 'n4sid', 'moesp' or 'cva', found '" + method + "'");
-}
-
-HankelRoute route_from_name(const std::string& name) {
-  for (const HankelRoute r : {HankelRoute::automatic, HankelRoute::qr, HankelRoute::cholesky, HankelRoute::cholesky_double_double})
-    if (name == to_string(r) || (name == "auto" && r == HankelRoute::automatic)) return r;
-  throw std::invalid_argument("hankel: expected 'auto', 'qr', 'cholesky' or 'cholesky_double_double', found '" + name + "'");
-}
-
 /// order: a number, or "auto" / None for the order rule's choice.
 int order_from(const std::variant<int, std::string, nb::none>& order) {
   if (const int* n = std::get_if<int>(&order)) {
@@ -46,7 +33,7 @@ ModelFile identify_subspace(const std::optional<SampleArray>& u, const SampleArr
                             const std::vector<std::string>& inputs, const std::vector<std::string>& outputs) {
   if (!u) throw std::invalid_argument("n4sid: needs the inputs u (an AR or ARMA model describes a time series)");
   N4sidOptions options;
-  options.weighting = weighting_from_name(method);
+  options.weighting = subspace_weighting_from_name(method);
   options.order = order_from(order);
   if (max_order) options.max_order = *max_order;
   options.order_rule = order_rule_from_name(order_rule);
@@ -59,7 +46,7 @@ ModelFile identify_subspace(const std::optional<SampleArray>& u, const SampleArr
   }
   options.band_limit_order = band_limit_order;
   if (decimation) options.decimation = *decimation;
-  options.route = route_from_name(hankel);
+  options.route = hankel_route_from_name(hankel);
   IoData data = io_data(u, y, Ts, inputs, outputs);
   const std::vector<std::string> input_names = data.input_names, output_names = data.output_names;
   ModelFile file;
@@ -81,7 +68,7 @@ ModelFile identify_subspace(const std::optional<SampleArray>& u, const SampleArr
 std::vector<double> time_n4sid(const SampleArray& u, const SampleArray& y, double Ts, int order, int horizon,
                                const std::string& method, int repeats) {
   N4sidOptions options;
-  options.weighting = weighting_from_name(method);
+  options.weighting = subspace_weighting_from_name(method);
   options.order = order;
   options.horizon = horizon;
   const IoData data = io_data(u, y, Ts, {}, {});

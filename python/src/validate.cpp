@@ -32,14 +32,13 @@ CompareOptions compare_options(const ModelFile& model, const std::string& x0) {
 }
 
 Experiment experiment(const ModelFile& model, const std::optional<SampleArray>& u, const SampleArray& y) {
-  const double Ts = model.model.is_discrete() ? model.model.Ts : 1.0;
-  IoData data = io_data(u, y, Ts, {}, {});
+  if (!model.model.is_discrete())
+    throw std::invalid_argument("a continuous-time model (Ts = 0): sample it first (it runs only on a sampled record)");
+  IoData data = io_data(u, y, model.model.Ts, {}, {});
   if (data.inputs() != model.model.inputs() || data.outputs() != model.model.outputs())
     throw std::invalid_argument("the record has " + std::to_string(data.inputs()) + " input(s) and " +
                                 std::to_string(data.outputs()) + " output(s), the model " +
                                 std::to_string(model.model.inputs()) + " and " + std::to_string(model.model.outputs()));
-  if (!model.model.is_discrete())
-    throw std::invalid_argument("a continuous-time model (Ts = 0): sample it first (it runs only on a sampled record)");
   return std::move(data.experiments.front());
 }
 
@@ -69,8 +68,8 @@ nb::dict residual_analysis(const ModelFile& model, const std::optional<SampleArr
     const std::vector<Eigen::Index> counts = noise_model_parameter_counts(model, "model");
     ro.noise_parameters = counts.empty() ? 0 : *std::max_element(counts.begin(), counts.end());
   }
-  ro.output_names = output_names_of(model.model);
-  ro.input_names = input_names_of(model.model);
+  ro.output_names = model.model.output_names_or_defaults();
+  ro.input_names = model.model.input_names_or_defaults();
   Eigen::MatrixXd residuals;
   ResidualAnalysisResult r;
   {

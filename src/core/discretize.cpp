@@ -60,6 +60,15 @@ StateSpace c2d(const StateSpace& continuous, double Ts, Hold hold) {
   return hold == Hold::foh ? c2d_foh(continuous, Ts) : c2d_zoh(continuous, Ts);
 }
 
+StateSpace model_at_sample_time(const StateSpace& model, double Ts, Hold hold, const std::string& source) {
+  if (!model.is_discrete()) return c2d(model, Ts, hold);
+  if (std::abs(model.Ts - Ts) > 1e-6 * model.Ts)
+    throw DataError(source, 0, 0,
+                    "the model's sample time " + format_number(model.Ts, 9) + " s differs from the log's " +
+                        format_number(Ts, 9) + " s; a discrete-time model runs only at its own rate");
+  return model;
+}
+
 StateSpace d2c_zoh(const StateSpace& discrete) {
   discrete.validate();
   if (!discrete.is_discrete()) throw std::invalid_argument("d2c_zoh: need a discrete model (Ts > 0)");

@@ -402,6 +402,13 @@ Eigen::Index CsvTable::column(const std::string& name) const {
   return it == names.end() ? -1 : static_cast<Eigen::Index>(it - names.begin());
 }
 
+NanPolicy nan_policy_from_name(const std::string& name) {
+  if (name == "error") return NanPolicy::error;
+  if (name == "drop") return NanPolicy::drop_rows;
+  if (name == "interpolate") return NanPolicy::interpolate;
+  throw std::invalid_argument("nan_policy: expected 'error', 'drop' or 'interpolate', found '" + name + "'");
+}
+
 double seconds_per(TimeUnit unit) {
   switch (unit) {
     case TimeUnit::milliseconds: return 1e-3;

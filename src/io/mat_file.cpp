@@ -120,11 +120,8 @@ std::vector<MatVariable> model_mat_variables(const ModelFile& file) {
                                 MatVariable::matrix("D", s.D), MatVariable::matrix("Ts", Eigen::MatrixXd::Constant(1, 1, s.Ts))};
   if (file.K.size() > 0) v.push_back(MatVariable::matrix("K", file.K));
   if (file.x0.size() > 0) v.push_back(MatVariable::matrix("x0", file.x0));
-  std::vector<std::string> inputs, outputs;
-  for (Eigen::Index j = 0; j < s.inputs(); ++j) inputs.push_back(s.input_name(j));
-  for (Eigen::Index i = 0; i < s.outputs(); ++i) outputs.push_back(s.output_name(i));
-  if (!inputs.empty()) v.push_back(MatVariable::cell_of_strings("InputName", inputs));
-  v.push_back(MatVariable::cell_of_strings("OutputName", outputs));
+  if (s.inputs() > 0) v.push_back(MatVariable::cell_of_strings("InputName", s.input_names_or_defaults()));
+  v.push_back(MatVariable::cell_of_strings("OutputName", s.output_names_or_defaults()));
   return v;
 }
 

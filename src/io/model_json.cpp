@@ -444,4 +444,22 @@ void write_model_json(const std::string& path, const ModelFile& file) {
   write_file_atomically(path, model_to_json_string(file));
 }
 
+nlohmann::json json_list_or_null(const Eigen::VectorXd& values) {
+  nlohmann::json list = nlohmann::json::array();
+  for (Eigen::Index i = 0; i < values.size(); ++i) {
+    if (std::isfinite(values(i)))
+      list.push_back(values(i));
+    else
+      list.push_back(nullptr);
+  }
+  return list;
+}
+
+StateSpace named_model(const ModelFile& file) {
+  StateSpace s = file.model;
+  s.input_names = s.input_names_or_defaults();
+  s.output_names = s.output_names_or_defaults();
+  return s;
+}
+
 }  // namespace sysid

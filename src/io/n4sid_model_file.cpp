@@ -1,21 +1,8 @@
 #include "sysid/io/n4sid_model_file.hpp"
 
-#include <cmath>
-
 #include "sysid/config.hpp"
 
 namespace sysid {
-
-nlohmann::json json_list_or_null(const Eigen::VectorXd& values) {
-  nlohmann::json list = nlohmann::json::array();
-  for (Eigen::Index i = 0; i < values.size(); ++i) {
-    if (std::isfinite(values(i)))
-      list.push_back(values(i));
-    else
-      list.push_back(nullptr);
-  }
-  return list;
-}
 
 ModelFile n4sid_model_file(const N4sidResult& result, const N4sidOptions& options,
                            const std::vector<std::string>& input_names, const std::vector<std::string>& output_names) {

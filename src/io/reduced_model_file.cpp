@@ -9,27 +9,13 @@
 
 namespace sysid {
 
-namespace {
-
-/// The model file's state space with its channel names (u1.., y1.. where absent).
-StateSpace named_state_space(const ModelFile& file) {
-  StateSpace sys = file.model;
-  if (sys.input_names.empty())
-    for (Eigen::Index j = 0; j < sys.inputs(); ++j) sys.input_names.push_back(sys.input_name(j));
-  if (sys.output_names.empty())
-    for (Eigen::Index i = 0; i < sys.outputs(); ++i) sys.output_names.push_back(sys.output_name(i));
-  return sys;
-}
-
-}  // namespace
-
 ReducedModelFile reduce_model_file(const ModelFile& file, const ReduceRequest& request) {
   const int chosen = (request.order >= 0) + (request.max_error_ratio > 0.0) + request.band_hz.has_value();
   if (chosen != 1) throw std::invalid_argument("reduce: give exactly one of the order, the largest error ratio, the band");
   if (request.method != "balanced" && request.method != "spa" && request.method != "modal")
     throw std::invalid_argument("reduce: method must be 'balanced', 'spa' or 'modal', found '" + request.method + "'");
   ReducedModelFile out;
-  StateSpace sys = named_state_space(file);
+  StateSpace sys = named_model(file);
   out.time_series = sys.inputs() == 0;
   if (out.time_series) {
     if (file.K.size() == 0) throw std::invalid_argument("reduce: the model has no inputs and no noise gain K: nothing to reduce");

@@ -39,6 +39,9 @@
 #include <sysid/core/poles_zeros.hpp>
 #include <sysid/core/state_space.hpp>
 
+#include <stdexcept>
+#include <string>
+
 namespace sysid {
 
 /// Purpose: exact ZOH discretisation of a continuous model with sample time Ts.
@@ -55,8 +58,22 @@ StateSpace c2d_foh(const StateSpace& continuous, double Ts);
 /// The holds a continuous model can be sampled with.
 enum class Hold { zoh, foh };
 
+/// "zoh" or "foh"; std::invalid_argument otherwise.
+inline Hold hold_from_name(const std::string& name) {
+  if (name == "zoh") return Hold::zoh;
+  if (name == "foh") return Hold::foh;
+  throw std::invalid_argument("hold: expected 'zoh' or 'foh', found '" + name + "'");
+}
+
 /// c2d_zoh or c2d_foh.
 StateSpace c2d(const StateSpace& continuous, double Ts, Hold hold);
+
+/// Purpose: `model` ready to run on data sampled every `Ts` seconds, as every verb
+/// that runs a model file on a log (and Python's diagnose) takes it: a continuous
+/// model is discretised with `hold` (names kept); a discrete model whose sample
+/// time differs from Ts by more than 1e-6 relative is sysid::DataError naming
+/// `source` (a model runs only at its own rate).
+StateSpace model_at_sample_time(const StateSpace& model, double Ts, Hold hold, const std::string& source);
 
 /// Purpose: the continuous model whose exact ZOH discretisation is `discrete`.
 /// Preconditions: discrete.Ts > 0 (std::invalid_argument).

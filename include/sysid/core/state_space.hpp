@@ -42,6 +42,17 @@ struct StateSpace {
   std::string output_name(Eigen::Index i) const {
     return i < static_cast<Eigen::Index>(output_names.size()) ? output_names[i] : "y" + std::to_string(i + 1);
   }
+  /// Every input's / output's name, u1.. / y1.. where absent.
+  std::vector<std::string> input_names_or_defaults() const {
+    std::vector<std::string> names;
+    for (Eigen::Index j = 0; j < inputs(); ++j) names.push_back(input_name(j));
+    return names;
+  }
+  std::vector<std::string> output_names_or_defaults() const {
+    std::vector<std::string> names;
+    for (Eigen::Index i = 0; i < outputs(); ++i) names.push_back(output_name(i));
+    return names;
+  }
 
   /// Throws std::invalid_argument naming the first inconsistent dimension or a
   /// non-finite entry, so a bad model never reaches an algorithm.

@@ -70,6 +70,15 @@ inline const char* to_string(HankelRoute r) {
   return "?";
 }
 
+/// The route named `name`: to_string's names, with "auto" for automatic (the
+/// command line's --hankel, Python's hankel=); std::invalid_argument otherwise.
+inline HankelRoute hankel_route_from_name(const std::string& name) {
+  if (name == "auto") return HankelRoute::automatic;
+  for (const HankelRoute r : {HankelRoute::automatic, HankelRoute::qr, HankelRoute::cholesky, HankelRoute::cholesky_double_double})
+    if (name == to_string(r)) return r;
+  throw std::invalid_argument("hankel: expected 'auto', 'qr', 'cholesky' or 'cholesky_double_double', found '" + name + "'");
+}
+
 struct BlockHankelOptions {
   int horizon = 10;                           ///< i: number of past (and of future) block rows
   HankelRoute route = HankelRoute::automatic;  ///< automatic = cholesky, then cholesky_double_double, then qr

@@ -102,6 +102,10 @@ enum class NanPolicy {
   interpolate,
 };
 
+/// "error", "drop" (drop_rows), "interpolate" (the command line's --nan-policy,
+/// Python's nan_policy=); std::invalid_argument otherwise.
+NanPolicy nan_policy_from_name(const std::string& name);
+
 /// What a time column counts.
 enum class TimeUnit { seconds, milliseconds, microseconds };
 

@@ -47,6 +47,14 @@ struct ModelFile {
   nlohmann::json extra = nlohmann::json::object();       ///< every other key, kept verbatim (round-tripped)
 };
 
+/// The file's state space carrying every channel's name (u1.., y1.. where the file
+/// has none; polynomial and augmented files included).
+StateSpace named_model(const ModelFile& file);
+
+/// A vector as a JSON list, NaN and Inf written as null (JSON has no number for
+/// them: an order that failed in a sweep has a NaN fit).
+nlohmann::json json_list_or_null(const Eigen::VectorXd& values);
+
 /// Pretty-printed JSON text (2-space indent, matrix rows on one line each).
 /// Preconditions (std::invalid_argument): model.validate() passes; K is n x l,
 /// noise_covariance l x l, x0 n, offsets m and l (or empty); all finite; type is one

@@ -26,8 +26,4 @@ namespace sysid {
 ModelFile n4sid_model_file(const N4sidResult& result, const N4sidOptions& options,
                            const std::vector<std::string>& input_names, const std::vector<std::string>& output_names);
 
-/// A vector as a JSON list, NaN and Inf written as null (JSON has no number for
-/// them: an order that failed in a sweep has a NaN fit).
-nlohmann::json json_list_or_null(const Eigen::VectorXd& values);
-
 }  // namespace sysid

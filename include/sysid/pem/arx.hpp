@@ -39,6 +39,16 @@ namespace sysid {
 
 enum class ArMethod { least_squares, yule_walker, burg, modified_yule_walker };
 
+/// The AR method named `name`: "ls", "yw", "burg", "myw" (the command line's
+/// --method of `sysid ar`, Python's method=); std::invalid_argument otherwise.
+inline ArMethod ar_method_from_name(const std::string& name) {
+  if (name == "ls") return ArMethod::least_squares;
+  if (name == "yw") return ArMethod::yule_walker;
+  if (name == "burg") return ArMethod::burg;
+  if (name == "myw") return ArMethod::modified_yule_walker;
+  throw std::invalid_argument("method: expected 'ls', 'yw', 'burg' or 'myw', found '" + name + "'");
+}
+
 struct ArxOptions {
   int na = 2;
   std::vector<int> nb;  ///< per input; must have one entry per input

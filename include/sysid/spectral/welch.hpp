@@ -51,6 +51,14 @@ namespace sysid {
 
 /// What is removed from each segment before windowing.
 enum class Detrend { none, mean, linear };
+
+/// "none", "mean", "linear"; std::invalid_argument otherwise.
+inline Detrend detrend_from_name(const std::string& name) {
+  if (name == "none") return Detrend::none;
+  if (name == "mean") return Detrend::mean;
+  if (name == "linear") return Detrend::linear;
+  throw std::invalid_argument("detrend: expected 'none', 'mean' or 'linear', found '" + name + "'");
+}
 /// Density (units^2/Hz, integrates to the variance) or spectrum (units^2, reads sine powers).
 enum class SpectralScaling { density, spectrum };
 

@@ -77,6 +77,14 @@ inline const char* to_string(SubspaceWeighting w) {
   return "?";
 }
 
+/// The weighting named `name` (to_string's names: the command line's --method and
+/// Python's method=); std::invalid_argument otherwise.
+inline SubspaceWeighting subspace_weighting_from_name(const std::string& name) {
+  for (const SubspaceWeighting w : {SubspaceWeighting::n4sid, SubspaceWeighting::moesp, SubspaceWeighting::cva})
+    if (name == to_string(w)) return w;
+  throw std::invalid_argument("method: expected 'n4sid', 'moesp' or 'cva', found '" + name + "'");
+}
+
 struct N4sidOptions {
   SubspaceWeighting weighting = SubspaceWeighting::n4sid;
   /// Model order; 0 = choose automatically from the singular values (see order_rule).
