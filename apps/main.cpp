@@ -65,15 +65,8 @@ int main(int argc, char** argv) {
 
   std::vector<sysid::cli::Verb> verbs;
   try {
-    verbs = {sysid::cli::register_n4sid(app), sysid::cli::register_simulate(app), sysid::cli::register_compare(app),
-             sysid::cli::register_show(app), sysid::cli::register_excite(app),
-             sysid::cli::register_resid(app), sysid::cli::register_frf(app), sysid::cli::register_psd(app),
-             sysid::cli::register_filter(app), sysid::cli::register_arx(app), sysid::cli::register_ar(app),
-             sysid::cli::register_armax(app), sysid::cli::register_arma(app), sysid::cli::register_oe(app),
-             sysid::cli::register_assemble(app), sysid::cli::register_hsv(app), sysid::cli::register_reduce(app),
-             sysid::cli::register_lms(app), sysid::cli::register_okid(app), sysid::cli::register_era(app),
-             sysid::cli::register_diagnose(app), sysid::cli::register_check(app),
-             sysid::cli::register_export(app)};
+    for (const sysid::cli::VerbRegistration registration : sysid::cli::verb_registrations())
+      verbs.push_back(registration(app));
     // Every verb that writes files gets --force; without it an existing output is
     // refused before any work (claim_outputs in cli_common.hpp).
     for (const auto& verb : verbs)

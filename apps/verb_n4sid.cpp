@@ -221,28 +221,37 @@ std::string format_sweep_table(const std::vector<OrderSweepEntry>& table, const 
   return s.str();
 }
 
-void run_n4sid(const N4sidArgs& a) {
-  const std::string verb = "n4sid";
+/// What identify_n4sid found: the model file (without the data's name), the result
+/// the plots need, and the report, notes and warnings to print.
+struct N4sidOutcome {
+  Identified identified;
+  N4sidResult res;
+};
+
+/// Loads the log, identifies, builds the report and the model file; prints and
+/// writes nothing (run_n4sid does, and `sysid family` calls this per member).
+/// keep_estimation: keep a copy of the estimation data in the outcome.
+N4sidOutcome identify_n4sid(const N4sidArgs& a, bool keep_estimation) {
   OrderSpec order;
   if (const std::string err = parse_order(a.order, order); !err.empty()) throw CLI::ValidationError("--order", err);
-
-  std::vector<std::string> inputs_files{a.log_path};
-  if (!a.validate.empty()) inputs_files.push_back(a.validate);
-  claim_outputs({a.out, a.plot, a.stabilization}, inputs_files);
   const bool diagram = !a.stabilization.empty();
   if (diagram && !order.sweep)
     throw CLI::ValidationError("--stabilization", "needs --order LO:HI, the orders the diagram shows (e.g. --order 2:60)");
 
+  N4sidOutcome outcome;
+  Identified& identified = outcome.identified;
   const LogOptions log_options =
       make_log_options(a.log, split_names(a.log.inputs, "--inputs"), split_names(a.log.outputs, "--outputs"));
+  identified.log_options = log_options;
   // Estimation and validation data.
   std::optional<double> split_fraction = a.split;
   if (order.sweep && !diagram && !split_fraction && a.validate.empty()) {
     split_fraction = 0.7;
-    note(verb, "--order A:B compares orders on validation data; none given, so using --split 0.7");
+    identified.notes.push_back("--order A:B compares orders on validation data; none given, so using --split 0.7");
   }
   EstimationData loaded = load_estimation_data(a.log_path, a.validate, split_fraction, log_options);
   IoData& estimation = loaded.estimation;
+  if (keep_estimation) identified.estimation = estimation;
   std::optional<IoData>& validation = loaded.validation;
   const std::string& validation_label = loaded.validation_label;
   // Kept apart from the samples, which are moved into n4sid (peak memory: one copy of the log).
@@ -265,7 +274,7 @@ void run_n4sid(const N4sidArgs& a) {
   options.decimation = a.decimation == "auto" ? 0 : std::stoi(a.decimation);
 
   std::ostringstream report;
-  N4sidResult res;
+  N4sidResult& res = outcome.res;
   Eigen::VectorXd validation_fit;
   nlohmann::json sweep_json = nlohmann::json::array();
   if (diagram) {
@@ -298,7 +307,7 @@ void run_n4sid(const N4sidArgs& a) {
                             {"validation_fit_percent", json_list_or_null(e.validation_fit)}};
       sweep_json.push_back(row);
       if (!e.ok) {
-        for (const auto& w : e.warnings) warn(verb, w);
+        identified.warnings.insert(identified.warnings.end(), e.warnings.begin(), e.warnings.end());
         continue;
       }
       // Strictly better only: among equal fits the lowest order wins.
@@ -360,28 +369,38 @@ void run_n4sid(const N4sidArgs& a) {
            << " left out of the oblique projection)";
   report << "\n";
   report << "modes:\n" << format_modal_table(modal_table(res.model));
-  std::cout << report.str() << std::flush;
-  for (const auto& w : res.warnings) warn(verb, w);
-  if (diagram) {
-    write_stabilization(a.stabilization, res.stabilization, a.log_path);
-    note(verb, "wrote " + a.stabilization);
-  }
+  identified.report = report.str();
+  identified.warnings.insert(identified.warnings.end(), res.warnings.begin(), res.warnings.end());
 
-  if (a.out.empty()) {
-    if (!a.plot.empty()) plot_order_choice(a, res);
-    return;
-  }
-  ModelFile file = n4sid_model_file(res, options, all_input_names, all_output_names);
-  nlohmann::json& p = file.provenance;
+  identified.file = n4sid_model_file(res, options, all_input_names, all_output_names);
+  nlohmann::json& p = identified.file.provenance;
   p["data"] = a.log_path;
   if (validation) {
     p["validation_fit_percent"] = json_list_or_null(validation_fit);
     p["validation"] = validation_label;
   }
   if (order.sweep && !diagram) p["order_sweep"] = sweep_json;
-  write_model_json(a.out, file);
-  note(verb, "wrote " + a.out);
-  if (!a.plot.empty()) plot_order_choice(a, res);
+  return outcome;
+}
+
+void run_n4sid(const N4sidArgs& a) {
+  const std::string verb = "n4sid";
+  std::vector<std::string> inputs_files{a.log_path};
+  if (!a.validate.empty()) inputs_files.push_back(a.validate);
+  claim_outputs({a.out, a.plot, a.stabilization}, inputs_files);
+  const N4sidOutcome outcome = identify_n4sid(a, false);
+  for (const auto& n : outcome.identified.notes) note(verb, n);
+  std::cout << outcome.identified.report << std::flush;
+  for (const auto& w : outcome.identified.warnings) warn(verb, w);
+  if (!a.stabilization.empty()) {
+    write_stabilization(a.stabilization, outcome.res.stabilization, a.log_path);
+    note(verb, "wrote " + a.stabilization);
+  }
+  if (!a.out.empty()) {
+    write_model_json(a.out, outcome.identified.file);
+    note(verb, "wrote " + a.out);
+  }
+  if (!a.plot.empty()) plot_order_choice(a, outcome.res);
 }
 
 }  // namespace
@@ -476,7 +495,12 @@ Verb register_n4sid(CLI::App& app) {
       "  sysid n4sid log.csv --inputs u --outputs y --order auto --split 0.7 --out model.json\n"
       "  sysid n4sid log.csv --inputs u1,u2 --outputs y1,y2 --order 2:12 --validate run2.csv --out model.json\n"
       "  sysid n4sid modal.csv --inputs f1,f2 --outputs a1,...,a28 --order 2:60 --stabilization stab.svg --out model.json");
-  return {cmd, [args] { run_n4sid(*args); }};
+  return {cmd, [args] { run_n4sid(*args); },
+          [args](const std::string& log_path) {
+            N4sidArgs member = *args;
+            member.log_path = log_path;
+            return identify_n4sid(member, true).identified;
+          }};
 }
 
 }  // namespace sysid::cli

@@ -90,16 +90,26 @@ std::string format_polynomial(const Eigen::VectorXd& p) {
   return s.str();
 }
 
-void run_polynomial(Structure structure, const PolynomialArgs& a) {
+/// What identify_polynomial found (the model file, report and warnings) and
+/// whether the minimisation converged.
+struct PolynomialOutcome {
+  Identified identified;
+  bool converged = true;
+};
+
+/// Loads the log, fits, builds the report and the model file; prints and writes
+/// nothing (run_polynomial does, and `sysid family` calls this per member).
+PolynomialOutcome identify_polynomial(Structure structure, const PolynomialArgs& a, bool keep_estimation) {
   const std::string verb = name_of(structure);
-  std::vector<std::string> inputs_files{a.log_path};
-  if (!a.validate.empty()) inputs_files.push_back(a.validate);
-  claim_outputs({a.out}, inputs_files);
+  PolynomialOutcome outcome;
+  Identified& identified = outcome.identified;
   const LogOptions log_options = make_log_options(
       a.log, has_inputs(structure) ? split_names(a.log.inputs, "--inputs") : std::vector<std::string>{},
       split_names(a.log.outputs, "--outputs"));
+  identified.log_options = log_options;
   EstimationData data = load_estimation_data(a.log_path, a.validate, a.split, log_options);
   const IoData& est = data.estimation;
+  if (keep_estimation) identified.estimation = est;
   const Eigen::Index m = est.inputs(), l = est.outputs();
 
   // Orders: single values fit once; any range (lo < hi) searches the grid.
@@ -119,7 +129,7 @@ void run_polynomial(Structure structure, const PolynomialArgs& a) {
   const std::vector<PolynomialOrders> combos = order_combinations(grid, structure);
   std::ostringstream report;
   PolynomialFit fit;
-  std::vector<std::string> warnings;
+  std::vector<std::string>& warnings = identified.warnings;
   if (combos.size() == 1) {
     search.fit.orders = combos.front();
     fit = fit_polynomial(est, search.fit);
@@ -137,13 +147,14 @@ void run_polynomial(Structure structure, const PolynomialArgs& a) {
   }
   const std::vector<PolynomialModel>& models = fit.models;
   const Eigen::VectorXd input_offset = fit.input_offset.head(m), output_offset = fit.output_offset;
-  const bool converged = fit.converged;
+  outcome.converged = fit.converged;
   warnings.insert(warnings.end(), fit.warnings.begin(), fit.warnings.end());
   for (Eigen::Index r = 0; r < l; ++r)
     report << verb << " output '" << est.output_name(r) << "': " << fit.method_notes[static_cast<std::size_t>(r)]
            << (structure == Structure::ar ? " (" + a.ar_method + ")" : std::string()) << "\n";
 
-  ModelFile file = polynomial_fit_model_file(fit, search.fit, est.input_names, est.output_names);
+  identified.file = polynomial_fit_model_file(fit, search.fit, est.input_names, est.output_names);
+  ModelFile& file = identified.file;
   for (Eigen::Index r = 0; r < l; ++r) {
     const PolynomialModel& pm = models[static_cast<std::size_t>(r)];
     report << "output '" << est.output_name(r) << "': noise variance " << fmt(pm.noise_variance, 5) << "\n  A = "
@@ -175,21 +186,47 @@ void run_polynomial(Structure structure, const PolynomialArgs& a) {
   report << "one-step prediction fit [%] on " << (data.validation ? "validation" : "estimation") << " data:\n"
          << format_fit_lines(one_step_fit, names);
   report << "modes:\n" << format_modal_table(modal_table(file.model));
-  std::cout << report.str() << std::flush;
-  for (const auto& w : warnings) warn(verb, w);
+  identified.report = report.str();
+  nlohmann::json& p = file.provenance;
+  p["data"] = a.log_path;
+  if (combos.size() > 1) p["order_selection"] = to_string(search.criterion);
+  if (data.validation) p["validation"] = data.validation_label;
+  return outcome;
+}
 
-  if (!converged && !a.write_unconverged)
+void run_polynomial(Structure structure, const PolynomialArgs& a) {
+  const std::string verb = name_of(structure);
+  std::vector<std::string> inputs_files{a.log_path};
+  if (!a.validate.empty()) inputs_files.push_back(a.validate);
+  claim_outputs({a.out}, inputs_files);
+  const PolynomialOutcome outcome = identify_polynomial(structure, a, false);
+  std::cout << outcome.identified.report << std::flush;
+  for (const auto& w : outcome.identified.warnings) warn(verb, w);
+
+  if (!outcome.converged && !a.write_unconverged)
     throw NumericalError(verb + ": the prediction-error minimisation did not converge (see above); no model written "
                                 "(--write-unconverged writes it anyway)");
   if (!a.out.empty()) {
-    nlohmann::json& p = file.provenance;
-    p["data"] = a.log_path;
-    if (combos.size() > 1) p["order_selection"] = to_string(search.criterion);
-    if (data.validation) p["validation"] = data.validation_label;
-    write_model_json(a.out, file);
+    write_model_json(a.out, outcome.identified.file);
     note(verb, "wrote " + a.out);
   }
-  if (!converged) throw NumericalError(verb + ": the prediction-error minimisation did not converge; model written as asked");
+  if (!outcome.converged)
+    throw NumericalError(verb + ": the prediction-error minimisation did not converge; model written as asked");
+}
+
+/// identify_polynomial for `sysid family`: an unconverged fit is an error unless
+/// --write-unconverged was given, then a warning.
+Identified identify_polynomial_member(Structure structure, const PolynomialArgs& args, const std::string& log_path) {
+  PolynomialArgs member = args;
+  member.log_path = log_path;
+  PolynomialOutcome outcome = identify_polynomial(structure, member, true);
+  if (!outcome.converged) {
+    if (!args.write_unconverged)
+      throw NumericalError(std::string(name_of(structure)) + ": the prediction-error minimisation did not converge on " +
+                           log_path + " (--write-unconverged keeps such members)");
+    outcome.identified.warnings.push_back("the prediction-error minimisation did not converge; kept as asked");
+  }
+  return std::move(outcome.identified);
 }
 
 Verb register_structure(CLI::App& app, Structure structure, const std::string& description, const std::string& example) {
@@ -233,7 +270,8 @@ Verb register_structure(CLI::App& app, Structure structure, const std::string& d
   cmd->footer("Prints the polynomials, the fit on estimation and validation data and the modes. With order ranges\n"
               "(--na 8:32 ...) every combination is fitted and scored by AIC, BIC, FPE and validation fit in a table;\n"
               "the best by --select is written.\nExample:\n  " + example);
-  return {cmd, [args, structure] { run_polynomial(structure, *args); }};
+  return {cmd, [args, structure] { run_polynomial(structure, *args); },
+          [args, structure](const std::string& log_path) { return identify_polynomial_member(structure, *args, log_path); }};
 }
 
 }  // namespace

@@ -85,5 +85,6 @@ void bind_signal(nb::module_& m);
 void bind_validate(nb::module_& m);
 void bind_diagnose(nb::module_& m);
 void bind_fem(nb::module_& m);
+void bind_family(nb::module_& m);
 
 }  // namespace sysid::python

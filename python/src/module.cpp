@@ -74,4 +74,5 @@ NB_MODULE(_sysid, m) {
   bind_validate(m);
   bind_diagnose(m);
   bind_fem(m);
+  bind_family(m);
 }

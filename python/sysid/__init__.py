@@ -35,6 +35,7 @@ from ._sysid import (
     compare,
     diagnose,
     era,
+    family,
     fem_frf,
     fem_modes,
     fem_reduce,
@@ -50,6 +51,7 @@ from ._sysid import (
     okid,
     prbs,
     psd,
+    read_family,
     read_fem,
     read_log,
     read_markov,
@@ -71,6 +73,6 @@ def cva(u, y, Ts, **options):
 
 __all__ = [
     "DataError", "FemModel", "Markov", "Model", "NumericalError", "__version__", "ar", "arma", "armax", "arx", "check", "chirp", "compare",
-    "cva", "diagnose", "era", "fem_frf", "fem_modes", "fem_reduce", "filter", "fit_percent", "frf", "hsv", "lms", "model_from_json", "moesp", "multisine", "n4sid",
-    "oe", "okid", "prbs", "psd", "read_fem", "read_log", "read_markov", "read_model", "reduce", "resid",
+    "cva", "diagnose", "era", "family", "fem_frf", "fem_modes", "fem_reduce", "filter", "fit_percent", "frf", "hsv", "lms", "model_from_json", "moesp", "multisine", "n4sid",
+    "oe", "okid", "prbs", "psd", "read_family", "read_fem", "read_log", "read_markov", "read_model", "reduce", "resid",
 ]

@@ -351,7 +351,7 @@ Eigen::MatrixXd matrix_from_json(const json& j, const std::string& key) {
   return m;
 }
 
-std::string model_to_json_string(const ModelFile& f) {
+nlohmann::ordered_json model_to_ordered_json(const ModelFile& f) {
   if (std::find(std::begin(k_types), std::end(k_types), f.type) == std::end(k_types))
     throw std::invalid_argument("model_to_json: type must be \"state-space\", \"polynomial\" or \"augmented\", is \"" +
                                 f.type + "\"");
@@ -396,12 +396,17 @@ std::string model_to_json_string(const ModelFile& f) {
   if (!f.provenance.empty()) top["provenance"] = ordered_json(f.provenance);
   if (sub_key.empty())
     for (const auto& [key, value] : f.extra.items()) top[key] = ordered_json(value);
+  return top;
+}
 
+std::string pretty_json(const nlohmann::ordered_json& value) {
   std::string out;
-  print(out, top, 0);
+  print(out, value, 0);
   out += "\n";
   return out;
 }
+
+std::string model_to_json_string(const ModelFile& f) { return pretty_json(model_to_ordered_json(f)); }
 
 nlohmann::json parse_json_text(const std::string& text, const std::string& source_name) {
   if (const std::size_t at = too_deep_at(text); at != std::string::npos) {
@@ -429,7 +434,10 @@ nlohmann::json parse_json_text(const std::string& text, const std::string& sourc
 }
 
 ModelFile model_from_json_string(const std::string& text, const std::string& source_name) {
-  const json root = parse_json_text(text, source_name);
+  return model_from_json_value(parse_json_text(text, source_name), source_name);
+}
+
+ModelFile model_from_json_value(const nlohmann::json& root, const std::string& source_name) {
   try {
     return model_from_root(root);
   } catch (const DataError& e) {

@@ -17,6 +17,7 @@
 #include <sysid/signal/butterworth.hpp>
 #include <sysid/signal/resample.hpp>
 #include <sysid/signal/sos_filter.hpp>
+#include <sysid/spectral/excited_band.hpp>
 #include <sysid/spectral/welch.hpp>
 #include <sysid/subspace/bdx_least_squares.hpp>
 #include <sysid/subspace/innovation_model.hpp>
@@ -117,21 +118,6 @@ inline std::pair<Eigen::MatrixXd, Eigen::MatrixXd> sqrt_and_inverse_sqrt(const E
   for (Eigen::Index k = 0; k < ev.size(); ++k) inv_root(k) = ev(k) > rel_tol * top ? 1.0 / root(k) : 0.0;
   const Eigen::MatrixXd& v = eig.eigenvectors();
   return {v * root.asDiagonal() * v.transpose(), v * inv_root.asDiagonal() * v.transpose()};
-}
-
-/// The band [lo, hi] in which the inputs carry power: frequencies whose summed
-/// input PSD lies within 30 dB of its peak.
-inline std::pair<double, double> excited_band(const IoData& data) {
-  const Experiment& e = data.experiments.front();
-  WelchOptions wo;
-  wo.nfft = std::min<Eigen::Index>(4096, std::max<Eigen::Index>(64, e.samples() / 8));
-  const PowerSpectrum ps = welch_psd(e.u, 1.0 / data.Ts, wo);
-  const Eigen::VectorXd total = ps.psd.rowwise().sum();
-  const double threshold = total.maxCoeff() * 1e-3;
-  Eigen::Index lo = 0, hi = total.size() - 1;
-  while (lo < hi && total(lo) < threshold) ++lo;
-  while (hi > lo && total(hi) < threshold) --hi;
-  return {ps.freq_hz(lo), ps.freq_hz(hi)};
 }
 
 /// Largest singular value of the frequency response over [f0, f1] (grid of `points`).
@@ -572,7 +558,7 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
   ModelFreeDataWarnings data_checks;
   parallel_invoke(
       [&] {
-        std::tie(band_lo, band_hi) = detail::excited_band(data);
+        std::tie(band_lo, band_hi) = excited_band(data.experiments.front().u, 1.0 / data.Ts);
         res.decimation = detail::decimation_factor(1.0 / data.Ts, band_hi, options.decimation);
         // Zero-phase 8th-order Butterworth at 0.8 x the new Nyquist frequency on
         // inputs and outputs alike (their relation is unchanged), then every r-th sample.

@@ -58,3 +58,48 @@ TEST(Assemble, MismatchedPartsAreRefused) {
 }
 
 }  // namespace test_unit_core_assemble
+
+namespace test_unit_core_assemble_disturbance {
+
+using namespace sysid;
+
+// The disturbance input model is the innovation model scaled to unit white
+// noise: its spectrum H L L' H^* equals the innovation model's H Lambda H^*, and
+// beside a plant it adds one input per output (named w_<output>).
+TEST(DisturbanceInputModel, UnitNoiseGivesTheInnovationSpectrum) {
+  Eigen::MatrixXd A(2, 2), C(2, 2), K(2, 2), Lambda(2, 2);
+  A << 0.9, 0.2, -0.2, 0.8;
+  C << 1.0, 0.0, 0.5, 1.0;
+  K << 0.3, 0.1, -0.1, 0.4;
+  Lambda << 2.0, 0.3, 0.3, 0.5;
+  StateSpace noise(A, Eigen::MatrixXd::Zero(2, 0), C, Eigen::MatrixXd::Zero(2, 0), 0.01);
+  noise.output_names = {"y1", "y2"};
+  const StateSpace w = disturbance_input_model(noise, K, Lambda);
+  ASSERT_EQ(w.inputs(), 2);
+  EXPECT_EQ(w.input_names, (std::vector<std::string>{"w_y1", "w_y2"}));
+  const std::complex<double> z = std::exp(std::complex<double>(0.0, 0.7));
+  const Eigen::MatrixXcd I = Eigen::MatrixXcd::Identity(2, 2);
+  const Eigen::MatrixXcd H = C.cast<std::complex<double>>() * (z * I - A.cast<std::complex<double>>()).inverse() *
+                                 K.cast<std::complex<double>>() + I;
+  const Eigen::MatrixXcd G = w.C.cast<std::complex<double>>() * (z * I - w.A.cast<std::complex<double>>()).inverse() *
+                                 w.B.cast<std::complex<double>>() + w.D.cast<std::complex<double>>();
+  EXPECT_LT((G * G.adjoint() - H * Lambda.cast<std::complex<double>>() * H.adjoint()).norm(), 1e-12);
+
+  StateSpace plant(Eigen::MatrixXd::Constant(1, 1, 0.5), Eigen::MatrixXd::Ones(1, 1), Eigen::MatrixXd::Ones(2, 1),
+                   Eigen::MatrixXd::Zero(2, 1), 0.01);
+  plant.input_names = {"u"};
+  plant.output_names = {"y1", "y2"};
+  const StateSpace gp = assemble_inputs({plant, w});
+  EXPECT_EQ(gp.inputs(), 3);
+  EXPECT_EQ(gp.order(), 3);
+  EXPECT_EQ(gp.input_names, (std::vector<std::string>{"u", "w_y1", "w_y2"}));
+}
+
+TEST(DisturbanceInputModel, RefusesAModelWithoutItsNoiseDescription) {
+  const StateSpace noise(Eigen::MatrixXd::Constant(1, 1, 0.5), Eigen::MatrixXd::Zero(1, 0), Eigen::MatrixXd::Ones(1, 1),
+                         Eigen::MatrixXd::Zero(1, 0), 0.01);
+  EXPECT_THROW(disturbance_input_model(noise, Eigen::MatrixXd(), Eigen::MatrixXd::Ones(1, 1)), std::invalid_argument);
+  EXPECT_THROW(disturbance_input_model(noise, Eigen::MatrixXd::Ones(1, 1), -Eigen::MatrixXd::Ones(1, 1)), std::invalid_argument);
+}
+
+}  // namespace test_unit_core_assemble_disturbance

@@ -18,6 +18,8 @@
 /// output names in the same order; no input name used twice.
 #include <sysid/core/state_space.hpp>
 
+#include <Eigen/Cholesky>
+
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -66,6 +68,36 @@ inline StateSpace assemble_inputs(const std::vector<StateSpace>& parts) {
   }
   for (Eigen::Index i = 0; i < l; ++i) out.output_names.push_back(first.output_name(i));
   out.validate();
+  return out;
+}
+
+/// Purpose: a time-series model in innovation form (x+ = A x + K e, y = C x + e,
+/// Cov e = Lambda: an AR/ARMA model, or n4sid on a record without inputs) as a
+/// model whose inputs w are unit-variance white noise: (A, K L, C, L), L the lower
+/// Cholesky factor of Lambda, so y = C (zI - A)^-1 K L w + L w with Cov w = I. Its
+/// inputs are named w_<output>. Stacked beside a plant by assemble_inputs it gives
+/// the generalised plant y = G u + H w of the Par2 paper's Fig. 4, the form an H2
+/// or H-infinity synthesis takes.
+/// Preconditions (std::invalid_argument): a model without inputs; K is n x l and
+/// Lambda l x l, symmetric positive definite.
+inline StateSpace disturbance_input_model(const StateSpace& model, const Eigen::MatrixXd& K, const Eigen::MatrixXd& noise_covariance) {
+  const Eigen::Index n = model.order(), l = model.outputs();
+  if (model.inputs() > 0)
+    throw std::invalid_argument("disturbance model: needs a time-series model (no inputs: AR, ARMA, n4sid without inputs); "
+                                "this one has " + std::to_string(model.inputs()) + " input(s)");
+  if (K.rows() != n || K.cols() != l)
+    throw std::invalid_argument("disturbance model: needs its Kalman gain K (" + std::to_string(n) + " x " + std::to_string(l) +
+                                "): an AR, ARMA or time-series model");
+  if (noise_covariance.rows() != l || noise_covariance.cols() != l)
+    throw std::invalid_argument("disturbance model: needs its innovation covariance (" + std::to_string(l) + " x " +
+                                std::to_string(l) + ")");
+  const Eigen::LLT<Eigen::MatrixXd> llt(0.5 * (noise_covariance + noise_covariance.transpose()));
+  if (llt.info() != Eigen::Success)
+    throw std::invalid_argument("disturbance model: the innovation covariance is not positive definite");
+  const Eigen::MatrixXd L = llt.matrixL();
+  StateSpace out(model.A, K * L, model.C, L, model.Ts);
+  out.output_names = model.output_names_or_defaults();
+  for (Eigen::Index i = 0; i < l; ++i) out.input_names.push_back("w_" + out.output_names[static_cast<std::size_t>(i)]);
   return out;
 }
 

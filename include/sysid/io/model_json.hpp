@@ -62,6 +62,19 @@ nlohmann::json json_list_or_null(const Eigen::VectorXd& values);
 /// format itself uses.
 std::string model_to_json_string(const ModelFile& file);
 
+/// The model as a JSON object, keys in the documented order (what
+/// model_to_json_string prints); the same preconditions. For files that hold
+/// models inside them (a family's members, io/family_file.hpp).
+nlohmann::ordered_json model_to_ordered_json(const ModelFile& file);
+
+/// The house's pretty printing of any JSON value (2-space indent, a list of plain
+/// values on one line, so a matrix is one row per line), with a final newline.
+std::string pretty_json(const nlohmann::ordered_json& value);
+
+/// A model from a parsed JSON object (a model file's root, or a model object
+/// inside another file); the errors of model_from_json_string, naming `source_name`.
+ModelFile model_from_json_value(const nlohmann::json& root, const std::string& source_name);
+
 /// Parses model JSON text; `source_name` stands for the file name in messages.
 /// Errors: sysid::DataError (file = source_name) for invalid JSON (with line and
 /// column), a missing required key (Ts, A, B, C, D), a malformed or mis-sized value
