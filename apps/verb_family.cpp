@@ -218,7 +218,7 @@ void plot_family(const std::string& path, const std::vector<MemberOutcome>& memb
   fig.title = "model family of " + manifest.path + " (" + std::to_string(members.size()) + " members)";
   const Eigen::VectorXd& f = family.frequency_hz;
   PlotPanel bode;
-  bode.title = "largest singular value of every member; the nominal (member " + std::to_string(nominal) + ") thick";
+  bode.title = "largest singular value of every member; the nominal (member " + std::to_string(nominal) + ") in its own colour";
   bode.xlabel = "frequency [Hz]";
   bode.ylabel = "gain [dB]";
   bode.logx = true;
