@@ -84,22 +84,30 @@ std::vector<int> spanning_tree(const Eigen::MatrixXd& distance, int root) {
   return parent;
 }
 
+/// One member's mode in a track: the member, the mode's index among the member's
+/// trackable modes, and the mode.
+struct Entry {
+  int member = 0;
+  int index = 0;
+  ModeEstimate mode;
+};
+
 /// The mean of a track's modes (frequency geometric, damping arithmetic, shape of
 /// the member nearest to the mean frequency), as a ModeEstimate for the merge pass.
-ModeEstimate track_summary(const std::vector<std::pair<int, ModeEstimate>>& entries) {
+ModeEstimate track_summary(const std::vector<Entry>& entries) {
   ModeEstimate s;
   double log_f = 0.0, zeta = 0.0;
-  for (const auto& [member, m] : entries) {
-    log_f += std::log(m.freq_hz);
-    zeta += m.damping;
+  for (const Entry& e : entries) {
+    log_f += std::log(e.mode.freq_hz);
+    zeta += e.mode.damping;
   }
   s.freq_hz = std::exp(log_f / static_cast<double>(entries.size()));
   s.damping = zeta / static_cast<double>(entries.size());
   double nearest = std::numeric_limits<double>::infinity();
-  for (const auto& [member, m] : entries)
-    if (std::abs(std::log(m.freq_hz / s.freq_hz)) < nearest) {
-      nearest = std::abs(std::log(m.freq_hz / s.freq_hz));
-      s.shape = m.shape;
+  for (const Entry& e : entries)
+    if (std::abs(std::log(e.mode.freq_hz / s.freq_hz)) < nearest) {
+      nearest = std::abs(std::log(e.mode.freq_hz / s.freq_hz));
+      s.shape = e.mode.shape;
     }
   return s;
 }
@@ -158,9 +166,8 @@ ModeTrackingResult track_modes(const std::vector<std::vector<ModeEstimate>>& mem
   result.tree_parent = spanning_tree(distance, root);
 
   // Breadth-first walk: each member inherits the tracks its parent knows.
-  std::vector<std::vector<std::pair<int, ModeEstimate>>> tracks;  // per track: (member, mode)
+  std::vector<std::vector<Entry>> tracks;
   std::vector<std::vector<std::pair<int, ModeEstimate>>> known(static_cast<std::size_t>(members));  // (track, latest mode)
-  std::vector<std::vector<int>> member_track(static_cast<std::size_t>(members));
   std::vector<std::vector<int>> children(static_cast<std::size_t>(members));
   for (int k = 0; k < members; ++k)
     if (result.tree_parent[static_cast<std::size_t>(k)] >= 0)
@@ -184,7 +191,7 @@ ModeTrackingResult track_modes(const std::vector<std::vector<ModeEstimate>>& mem
         assigned[j] = static_cast<int>(tracks.size());
         tracks.emplace_back();
       }
-      tracks[static_cast<std::size_t>(assigned[j])].emplace_back(member, own[j]);
+      tracks[static_cast<std::size_t>(assigned[j])].push_back({member, static_cast<int>(j), own[j]});
       bool replaced = false;
       for (auto& [track, m] : inherited)
         if (track == assigned[j]) {
@@ -194,24 +201,30 @@ ModeTrackingResult track_modes(const std::vector<std::vector<ModeEstimate>>& mem
       if (!replaced) inherited.emplace_back(assigned[j], own[j]);
     }
     known[static_cast<std::size_t>(member)] = std::move(inherited);
-    member_track[static_cast<std::size_t>(member)] = std::move(assigned);
     for (int child : children[static_cast<std::size_t>(member)]) order.push(child);
   }
 
-  // Step 4: merge tracks that never share a member and pass the gate together.
-  std::vector<int> alias(tracks.size());
-  std::iota(alias.begin(), alias.end(), 0);
+  // Step 4: merge tracks that are one mode seen in different branches of the
+  // tree. Tracks that share no member merge when their summaries pass the gate.
+  // A spurious mode next to a physical one (a noise mode of a member identified at
+  // a higher order) can pull that member's neighbours into a second track that
+  // shares the one member with the first: tracks sharing a few members (the
+  // smaller at least 2 x shared + 1 entries) merge too, each shared member keeping
+  // the mode nearer to its tree neighbours' in the merged track, the other mode
+  // going to a track of its own.
+  const double unmatched_cost = std::pow(options.frequency_gate / options.frequency_scale, 2);
   for (;;) {
     double best_cost = std::numeric_limits<double>::infinity();
     std::size_t best_a = 0, best_b = 0;
     for (std::size_t a = 0; a < tracks.size(); ++a)
       for (std::size_t b = a + 1; b < tracks.size(); ++b) {
         if (tracks[a].empty() || tracks[b].empty()) continue;
-        bool shared = false;
-        for (const auto& ea : tracks[a])
-          for (const auto& eb : tracks[b]) shared = shared || ea.first == eb.first;
-        if (shared) continue;
-        const double c = pair_cost(track_summary(tracks[a]), track_summary(tracks[b]), options);
+        std::size_t shared = 0;
+        for (const Entry& ea : tracks[a])
+          for (const Entry& eb : tracks[b]) shared += ea.member == eb.member ? 1 : 0;
+        if (shared > 0 && std::min(tracks[a].size(), tracks[b].size()) < 2 * shared + 1) continue;
+        const double c = pair_cost(track_summary(tracks[a]), track_summary(tracks[b]), options) +
+                         unmatched_cost * static_cast<double>(shared);
         if (c < best_cost) {
           best_cost = c;
           best_a = a;
@@ -219,10 +232,42 @@ ModeTrackingResult track_modes(const std::vector<std::vector<ModeEstimate>>& mem
         }
       }
     if (!std::isfinite(best_cost)) break;
-    tracks[best_a].insert(tracks[best_a].end(), tracks[best_b].begin(), tracks[best_b].end());
+    std::vector<Entry> merged = tracks[best_a], displaced;
+    for (const Entry& eb : tracks[best_b]) {
+      auto clash = std::find_if(merged.begin(), merged.end(), [&](const Entry& e) { return e.member == eb.member; });
+      if (clash == merged.end()) {
+        merged.push_back(eb);
+        continue;
+      }
+      // The reference: the merged track's modes of the member's tree neighbours.
+      double log_sum = 0.0;
+      int count = 0;
+      for (const Entry& e : merged) {
+        if (e.member == eb.member) continue;
+        const bool neighbour = result.tree_parent[static_cast<std::size_t>(e.member)] == eb.member ||
+                               result.tree_parent[static_cast<std::size_t>(eb.member)] == e.member;
+        if (neighbour) {
+          log_sum += std::log(e.mode.freq_hz);
+          ++count;
+        }
+      }
+      if (count == 0)
+        for (const Entry& e : merged)
+          if (e.member != eb.member) {
+            log_sum += std::log(e.mode.freq_hz);
+            ++count;
+          }
+      const double reference = count > 0 ? log_sum / count : std::log(clash->mode.freq_hz);
+      if (std::abs(std::log(eb.mode.freq_hz) - reference) < std::abs(std::log(clash->mode.freq_hz) - reference)) {
+        displaced.push_back(*clash);
+        *clash = eb;
+      } else {
+        displaced.push_back(eb);
+      }
+    }
+    tracks[best_a] = std::move(merged);
     tracks[best_b].clear();
-    for (int& t : alias)
-      if (t == static_cast<int>(best_b)) t = static_cast<int>(best_a);
+    for (const Entry& e : displaced) tracks.push_back({e});
   }
 
   // Output sorted by mean frequency.
@@ -234,9 +279,9 @@ ModeTrackingResult track_modes(const std::vector<std::vector<ModeEstimate>>& mem
     TrackedMode tm;
     tm.freq_hz = Eigen::VectorXd::Constant(members, kNaN);
     tm.damping = Eigen::VectorXd::Constant(members, kNaN);
-    for (const auto& [member, m] : tracks[t]) {
-      tm.freq_hz(member) = m.freq_hz;
-      tm.damping(member) = m.damping;
+    for (const Entry& e : tracks[t]) {
+      tm.freq_hz(e.member) = e.mode.freq_hz;
+      tm.damping(e.member) = e.mode.damping;
     }
     modes.push_back(std::move(tm));
   }
@@ -251,8 +296,10 @@ ModeTrackingResult track_modes(const std::vector<std::vector<ModeEstimate>>& mem
   }
   result.mode_track.resize(static_cast<std::size_t>(members));
   for (int k = 0; k < members; ++k)
-    for (int t : member_track[static_cast<std::size_t>(k)])
-      result.mode_track[static_cast<std::size_t>(k)].push_back(position[static_cast<std::size_t>(alias[static_cast<std::size_t>(t)])]);
+    result.mode_track[static_cast<std::size_t>(k)].assign(member_modes[static_cast<std::size_t>(k)].size(), -1);
+  for (std::size_t t : live)
+    for (const Entry& e : tracks[t])
+      result.mode_track[static_cast<std::size_t>(e.member)][static_cast<std::size_t>(e.index)] = position[t];
   return result;
 }
 

@@ -333,4 +333,30 @@ TEST(FamilyTrackModes, MembersWithoutModesAndNoMembers) {
   EXPECT_THROW(sysid::track_modes({}), std::invalid_argument);
 }
 
+TEST(FamilyTrackModes, ANoiseModeBesideAPhysicalOneDoesNotSplitItsTrack) {
+  // The generated Par2-like family at automatic orders (data/family, n4sid --order
+  // auto): three modes over 15 members, mode 3 running 76..92 Hz, and member 7,
+  // identified at order 10, carrying a noise mode at 90.45 Hz beside its physical
+  // 83.49 Hz. Members 5, 10 and 11 (88.0, 92.4, 89.9 Hz) used to follow the noise
+  // mode into a second track; now mode 3 is one track of 15 members and the noise
+  // mode a track of its own. Frequencies and dampings as identified.
+  const double f1[15] = {28.00, 26.40, 25.04, 23.88, 22.86, 28.00, 26.40, 25.04, 23.88, 22.86, 28.00, 26.40, 25.04, 23.88, 22.86};
+  const double z1[15] = {0.030, 0.031, 0.033, 0.034, 0.036, 0.030, 0.032, 0.033, 0.035, 0.036, 0.030, 0.032, 0.033, 0.034, 0.036};
+  const double f2[15] = {61.44, 59.03, 56.88, 54.96, 53.21, 64.00, 61.49, 59.25, 57.24, 55.42, 67.20, 64.56, 62.21, 60.10, 58.20};
+  const double z2[15] = {0.025, 0.026, 0.027, 0.029, 0.030, 0.025, 0.026, 0.027, 0.029, 0.030, 0.025, 0.026, 0.027, 0.029, 0.030};
+  const double f3[15] = {84.48, 82.23, 80.14, 78.21, 76.42, 88.00, 85.65, 83.49, 81.47, 79.60, 92.40, 89.94, 87.66, 85.54, 83.57};
+  const double z3[15] = {0.035, 0.037, 0.038, 0.040, 0.042, 0.035, 0.037, 0.039, 0.040, 0.042, 0.035, 0.037, 0.039, 0.040, 0.042};
+  std::vector<std::vector<ModeEstimate>> members;
+  for (int k = 0; k < 15; ++k) {
+    members.push_back({mode(f1[k], z1[k]), mode(f2[k], z2[k]), mode(f3[k], z3[k])});
+    if (k == 7) members.back().push_back(mode(90.45, 0.015));
+  }
+  const sysid::ModeTrackingResult r = sysid::track_modes(members);
+  ASSERT_EQ(r.modes.size(), 4u);
+  for (int k = 0; k < 15; ++k) EXPECT_EQ(r.modes[2].freq_hz(k), f3[k]) << "member " << k;
+  EXPECT_EQ(r.modes[3].members_present(), 1);
+  EXPECT_EQ(r.modes[3].freq_hz(7), 90.45);
+  EXPECT_EQ(r.mode_track[7], (std::vector<int>{0, 1, 2, 3}));
+}
+
 }  // namespace test_unit_family_mode_tracking

@@ -26,9 +26,14 @@
 ///     Walking the tree from the member with the most modes, each member's modes are
 ///     paired with the modes its parent knows — the parent's own, or, for a mode the
 ///     parent lacks, the latest ancestor's — and an unpaired mode starts a new track.
-///  4. Tracks that never share a member and whose mean frequencies, dampings and
-///     shapes pass the gate are one mode seen in different branches of the tree:
-///     they are merged (closest pair first).
+///  4. Tracks whose mean frequencies, dampings and shapes pass the gate are one
+///     mode seen in different branches of the tree: they are merged, closest pair
+///     first. Tracks that share a few members merge too (the smaller track at
+///     least 2 x shared + 1 entries, a gate-sized cost per shared member): a
+///     member identified at a higher order can carry a noise mode beside a
+///     physical one and pull its neighbours into a second track; each shared
+///     member keeps the mode nearer to its tree neighbours' and the other becomes
+///     a track of its own (a mode "in 1 of N members").
 ///
 /// Output: tracks sorted by mean frequency; NaN where a member does not have the mode.
 #include <sysid/core/state_space.hpp>
