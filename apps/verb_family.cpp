@@ -2,7 +2,6 @@
 // with that verb's options), the modes followed across the members, a nominal
 // model, the uncertainty bound and a weight that covers it (DESIGN.md "Model
 // families over operating conditions").
-#include <sysid/core/assemble.hpp>
 #include <sysid/core/errors.hpp>
 #include <sysid/core/frequency_response.hpp>
 #include <sysid/core/median.hpp>
@@ -104,7 +103,7 @@ MemberOutcome identify_member(const Verb& method, const FamilyManifestRow& row) 
     // A time series (a disturbance record): the family is one of noise models,
     // compared through their unit-noise innovation form y = H L w; a simulation
     // without inputs says nothing, so the fit is the one-step prediction's.
-    out.analysis_model = disturbance_input_model(model, file.K, file.noise_covariance);
+    out.analysis_model = family_member_model(model, file.K, file.noise_covariance);
     co.predict_steps = 1;
     out.fit_percent = validation ? compare_fit(model, file.K, *validation, co) : compare_fit(model, file.K, out.identified.estimation, co);
   } else {

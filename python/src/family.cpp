@@ -48,7 +48,7 @@ std::vector<Condition> conditions_from_python(const std::optional<nb::dict>& con
   return out;
 }
 
-nb::object family(const std::vector<ModelFile>& models, const std::optional<std::vector<std::pair<SampleArray, SampleArray>>>& data,
+nb::object family(const std::vector<ModelFile>& models, const std::optional<std::vector<std::pair<std::optional<SampleArray>, SampleArray>>>& data,
                   const std::optional<nb::dict>& conditions, const std::optional<std::vector<std::string>>& logs,
                   std::optional<std::pair<double, double>> band, const std::string& uncertainty, int weight_order,
                   std::optional<int> nominal, const std::optional<Path>& out) {
@@ -71,26 +71,35 @@ nb::object family(const std::vector<ModelFile>& models, const std::optional<std:
   {
     nb::gil_scoped_release release;
     std::vector<FamilyMemberModel> members;
+    std::vector<FamilyFileMember> file_members;
     for (std::size_t k = 0; k < models.size(); ++k) {
-      FamilyMemberModel m{named_model(models[k]), {}};
+      const StateSpace model = named_model(models[k]);
+      // As `sysid family`: a time series is compared through its unit-noise
+      // innovation form and fitted by one-step prediction; a plant by simulation,
+      // with the allowance from its record.
+      FamilyMemberModel m{family_member_model(model, models[k].K, models[k].noise_covariance), {}};
+      FamilyFileMember fm;
+      fm.log = logs ? (*logs)[k] : std::string();
+      fm.model = models[k];
       if (data) {
         CompareOptions co;
         co.input_offset = models[k].input_offset;
         co.output_offset = models[k].output_offset;
-        m.error = frequency_response_error(m.model, records[k], co);
+        if (model.inputs() == 0) {
+          co.predict_steps = 1;
+          fm.fit_percent = compare_fit(model, models[k].K, records[k], co);
+        } else {
+          const Experiment& e = records[k].experiments.front();
+          const CompareResult sim = compare(model, Eigen::MatrixXd(), e, co);
+          m.error = frequency_response_error(model.order(), e.u, e.y - sim.y_hat, model.Ts);
+          fm.fit_percent = sim.fit_percent;
+        }
       }
       members.push_back(std::move(m));
+      file_members.push_back(std::move(fm));
     }
     const ModelFamilyResult result = analyse_model_family(members, options);
     warnings = result.warnings;
-    std::vector<FamilyFileMember> file_members;
-    for (std::size_t k = 0; k < models.size(); ++k) {
-      FamilyFileMember fm;
-      fm.log = logs ? (*logs)[k] : std::string();
-      fm.model = models[k];
-      if (data) fm.fit_percent = compare_fit(members[k].model, Eigen::MatrixXd(), records[k], CompareOptions{.input_offset = models[k].input_offset, .output_offset = models[k].output_offset});
-      file_members.push_back(std::move(fm));
-    }
     file = make_family_file(std::move(file_members), condition_list, result, options);
     if (out) write_family_json(out->string(), file);
   }
@@ -112,7 +121,7 @@ void bind_family(nb::module_& m) {
         "'multiplicative-input' or 'additive') and a stable, minimum-phase weight of weight_order poles that\n"
         "covers it at every listed frequency.\n"
         "models: one Model per condition (identify them with sysid.n4sid, sysid.arx ... in any way).\n"
-        "data: optional (u, y) per model, the record it was identified on: gives each member's fit, the band\n"
+        "data: optional (u, y) per model (u None for a time series), the record it was identified on: gives each member's fit, the band\n"
         "the records excite and the allowance for the members' own estimation error in the bound.\n"
         "conditions: {name: [value per model]} (numbers or labels); logs: names written as members' 'log'.\n"
         "band: (lo, hi) Hz (default: the band every record excites, else up to Nyquist).\n"

@@ -78,3 +78,17 @@ def test_family_refuses_mismatched_conditions(family_dir):
         sysid.family(models, conditions={"payload_kg": [0.0]})
     with pytest.raises(ValueError):
         sysid.family(models, uncertainty="relative")
+
+
+def test_family_of_time_series_compares_the_noise_models(data_dir, tmp_path):
+    """AR models of disturbance records (the Par2 GW log cut in three): the family
+    compares their unit-noise innovation forms, as `sysid family --method ar` does."""
+    _, y, Ts = sysid.read_log(data_dir / "par2_gw.csv", outputs=["y"])
+    parts = np.array_split(y, 3)
+    models = [sysid.arma(part, Ts, na=4, nc=4) for part in parts]
+    fam = sysid.family(models, data=[(None, part) for part in parts], conditions={"segment": [1, 2, 3]})
+    freqs = sorted(m["spread"]["freq_hz"]["mean"] for m in fam["modes"])
+    assert abs(freqs[0] - 25.9) < 0.5  # GW's lightly damped mode, in every segment
+    assert all(f is not None for f in fam["modes"][0]["freq_hz"])
+    assert fam["uncertainty"]["weight"].B.shape[1] == 1
+    assert all(0.0 < m["fit_percent"][0] <= 100.0 for m in fam["members"])

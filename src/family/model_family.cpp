@@ -1,5 +1,6 @@
 // Implementation of family/model_family.hpp (method in the header).
 #include <sysid/family/model_family.hpp>
+#include <sysid/core/assemble.hpp>
 #include <sysid/core/format_number.hpp>
 #include <sysid/core/frequency_response.hpp>
 #include <sysid/core/parallel_for.hpp>
@@ -29,6 +30,10 @@ void check_members(const std::vector<FamilyMemberModel>& members) {
 }
 
 }  // namespace
+
+StateSpace family_member_model(const StateSpace& model, const Eigen::MatrixXd& K, const Eigen::MatrixXd& noise_covariance) {
+  return model.inputs() > 0 ? model : disturbance_input_model(model, K, noise_covariance);
+}
 
 ModelFamilyResult analyse_model_family(const std::vector<FamilyMemberModel>& members, const ModelFamilyOptions& options) {
   check_members(members);

@@ -294,3 +294,28 @@ TEST_F(FamilyApp, AnExistingOutputIsRefusedBeforeAnyWork) {
 }
 
 }  // namespace test_app_family
+
+namespace test_app_family_time_series {
+
+using namespace sysid::test;
+
+// A time-series method (a disturbance record per member): `--method ar` with ar's
+// own --method as the second one; the family compares the noise models and says so.
+TEST(FamilyTimeSeries, ArMembersWithTheVerbsOwnMethodOption) {
+  TempDir dir;
+  const std::string gw = std::string(SYSID_TEST_DATA_DIR) + "/par2_gw.csv";
+  write_text_file((dir.path() / "manifest.csv").string(), "log,segment\n" + gw + ",1\n" + gw + ",2\n");
+  const std::string out = (dir.path() / "gw_family.json").string();
+  const CliResult r = run_cli({"family", (dir.path() / "manifest.csv").string(), "--outputs", "y", "--method", "ar", "--na", "8",
+                               "--method", "myw", "--out", out});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(contains(r.out, "time series: the modes and the bound are those of the noise models")) << r.out;
+  EXPECT_TRUE(contains(r.out, "one-step prediction fit")) << r.out;
+  const nlohmann::json f = read_json(out);
+  EXPECT_EQ(f["members"][0]["model"]["provenance"]["method"], f["members"][1]["model"]["provenance"]["method"]);
+  EXPECT_EQ(f["members"][0]["model"]["provenance"]["ar_method"], "myw") << "ar's own --method reached it";
+  // Identical members: no spread, so no weight, and a warning says why.
+  EXPECT_TRUE(contains(r.err, "do not differ")) << r.err;
+}
+
+}  // namespace test_app_family_time_series

@@ -57,6 +57,14 @@ struct ModelFamilyResult {
   std::vector<std::string> warnings;
 };
 
+/// Purpose: the model a family compares for one member: the model itself, or for
+/// a time series (no inputs: a disturbance record's AR, ARMA or n4sid model) its
+/// unit-noise innovation form (core/assemble.hpp disturbance_input_model), the
+/// spectral factor whose deviations are the disturbance's uncertainty.
+/// Preconditions (std::invalid_argument): a time series carries K and the
+/// innovation covariance.
+StateSpace family_member_model(const StateSpace& model, const Eigen::MatrixXd& K, const Eigen::MatrixXd& noise_covariance);
+
 /// Purpose: the family's modes, nominal, bound and weight (file comment).
 ModelFamilyResult analyse_model_family(const std::vector<FamilyMemberModel>& members, const ModelFamilyOptions& options = {});
 

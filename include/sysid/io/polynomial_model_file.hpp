@@ -72,7 +72,8 @@ inline ModelFile polynomial_model_file(const std::vector<PolynomialModel>& model
 /// The model file of a polynomial fit (pem/polynomial_fit.hpp) as every caller
 /// writes it, the command line (apps/verb_polynomial.cpp) and the Python package
 /// alike: polynomial_model_file, the offsets, and the provenance of the fit
-/// (method, the orders the structure uses, converged, sysid_version); the caller
+/// (method, the orders the structure uses, the AR method of an AR model,
+/// converged, sysid_version); the caller
 /// adds what only it knows (the log's name, validation data, an order search).
 inline ModelFile polynomial_fit_model_file(const PolynomialFit& fit, const PolynomialFitOptions& options,
                                            const std::vector<std::string>& input_names,
@@ -85,6 +86,7 @@ inline ModelFile polynomial_fit_model_file(const PolynomialFit& fit, const Polyn
   p["method"] = to_string(structure);
   const PolynomialOrders& orders = options.orders;
   if (structure != PolynomialStructure::oe) p["na"] = orders.na;
+  if (structure == PolynomialStructure::ar) p["ar_method"] = to_string(options.ar_method);
   if (has_inputs(structure)) {
     p["nb"] = orders.nb;
     p["nk"] = orders.nk;

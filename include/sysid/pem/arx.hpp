@@ -49,6 +49,17 @@ inline ArMethod ar_method_from_name(const std::string& name) {
   throw std::invalid_argument("method: expected 'ls', 'yw', 'burg' or 'myw', found '" + name + "'");
 }
 
+/// The command line's name of an AR method (inverse of ar_method_from_name).
+inline const char* to_string(ArMethod method) {
+  switch (method) {
+    case ArMethod::least_squares: return "ls";
+    case ArMethod::yule_walker: return "yw";
+    case ArMethod::burg: return "burg";
+    case ArMethod::modified_yule_walker: return "myw";
+  }
+  return "?";
+}
+
 struct ArxOptions {
   int na = 2;
   std::vector<int> nb;  ///< per input; must have one entry per input
