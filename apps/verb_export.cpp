@@ -21,12 +21,12 @@ struct ExportArgs {
 
 void run_export(const ExportArgs& a) {
   claim_outputs({a.mat}, {a.model_path});
-  const std::string text = read_whole_file(a.model_path);
+  const nlohmann::json root = parse_json_text(read_whole_file(a.model_path), a.model_path);
   std::vector<MatVariable> variables;
-  if (is_family_json(parse_json_text(text, a.model_path))) {
-    variables = family_mat_variables(family_from_json_string(text, a.model_path));
+  if (is_family_json(root)) {
+    variables = family_mat_variables(family_from_json_value(root, a.model_path));
   } else {
-    const ModelFile file = model_from_json_string(text, a.model_path);
+    const ModelFile file = model_from_json_value(root, a.model_path);
     if (file.type == "augmented")
       note("export", a.model_path + " is an augmented model: writing its nominal (linear) part; the physics blocks have no "
                      "MATLAB form");

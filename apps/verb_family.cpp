@@ -88,32 +88,19 @@ struct MemberOutcome {
 MemberOutcome identify_member(const Verb& method, const FamilyManifestRow& row) {
   MemberOutcome out;
   out.identified = method.identify(row.log_path);
-  const ModelFile& file = out.identified.file;
-  const StateSpace model = named_model(file);
-  CompareOptions co = compare_options_for(file, "estimate", row.log_path);
-  const Experiment& own = out.identified.estimation.experiments.front();
+  const double Ts = out.identified.file.model.Ts;
   std::optional<IoData> validation;
   if (!row.validate_path.empty()) {
     validation = load_log(row.validate_path, out.identified.log_options).data;
-    if (std::abs(validation->Ts - model.Ts) > 1e-6 * model.Ts)
-      throw DataError(row.validate_path + ": sample time " + fmt(validation->Ts) + " s, the member's log has " + fmt(model.Ts) +
+    if (std::abs(validation->Ts - Ts) > 1e-6 * Ts)
+      throw DataError(row.validate_path + ": sample time " + fmt(validation->Ts) + " s, the member's log has " + fmt(Ts) +
                       " s; a validation log must be sampled like its estimation log");
   }
-  if (model.inputs() == 0) {
-    // A time series (a disturbance record): the family is one of noise models,
-    // compared through their unit-noise innovation form y = H L w; a simulation
-    // without inputs says nothing, so the fit is the one-step prediction's.
-    out.analysis_model = family_member_model(model, file.K, file.noise_covariance);
-    co.predict_steps = 1;
-    out.fit_percent = validation ? compare_fit(model, file.K, *validation, co) : compare_fit(model, file.K, out.identified.estimation, co);
-  } else {
-    // One simulation on the member's own log gives both its fit (without a
-    // validate log) and its output error, hence the response's standard deviation.
-    out.analysis_model = model;
-    const CompareResult sim = compare(model, Eigen::MatrixXd(), own, co);
-    out.error = frequency_response_error(model.order(), own.u, own.y - sim.y_hat, model.Ts);
-    out.fit_percent = validation ? compare_fit(model, Eigen::MatrixXd(), *validation, co) : sim.fit_percent;
-  }
+  FamilyMemberEvidence evidence =
+      family_member_evidence(out.identified.file, &out.identified.estimation, validation ? &*validation : nullptr);
+  out.analysis_model = std::move(evidence.member.model);
+  out.error = std::move(evidence.member.error);
+  out.fit_percent = std::move(evidence.fit_percent);
   out.identified.estimation = IoData{};  // one log in memory per worker
   return out;
 }

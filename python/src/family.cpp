@@ -2,10 +2,8 @@
 // uncertainty bound and weight from models identified in Python
 // (family/model_family.hpp), as the family file `sysid family` writes
 // (io/family_file.hpp: one piece of code for both).
-#include <sysid/family/estimation_error.hpp>
 #include <sysid/family/model_family.hpp>
 #include <sysid/io/family_file.hpp>
-#include <sysid/validate/compare.hpp>
 
 #include <nanobind/stl/pair.h>
 
@@ -73,29 +71,13 @@ nb::object family(const std::vector<ModelFile>& models, const std::optional<std:
     std::vector<FamilyMemberModel> members;
     std::vector<FamilyFileMember> file_members;
     for (std::size_t k = 0; k < models.size(); ++k) {
-      const StateSpace model = named_model(models[k]);
-      // As `sysid family`: a time series is compared through its unit-noise
-      // innovation form and fitted by one-step prediction; a plant by simulation,
-      // with the allowance from its record.
-      FamilyMemberModel m{family_member_model(model, models[k].K, models[k].noise_covariance), {}};
+      // As `sysid family` (io/family_file.hpp family_member_evidence).
+      FamilyMemberEvidence evidence = family_member_evidence(models[k], data ? &records[k] : nullptr, nullptr);
       FamilyFileMember fm;
       fm.log = logs ? (*logs)[k] : std::string();
       fm.model = models[k];
-      if (data) {
-        CompareOptions co;
-        co.input_offset = models[k].input_offset;
-        co.output_offset = models[k].output_offset;
-        if (model.inputs() == 0) {
-          co.predict_steps = 1;
-          fm.fit_percent = compare_fit(model, models[k].K, records[k], co);
-        } else {
-          const Experiment& e = records[k].experiments.front();
-          const CompareResult sim = compare(model, Eigen::MatrixXd(), e, co);
-          m.error = frequency_response_error(model.order(), e.u, e.y - sim.y_hat, model.Ts);
-          fm.fit_percent = sim.fit_percent;
-        }
-      }
-      members.push_back(std::move(m));
+      fm.fit_percent = std::move(evidence.fit_percent);
+      members.push_back(std::move(evidence.member));
       file_members.push_back(std::move(fm));
     }
     const ModelFamilyResult result = analyse_model_family(members, options);

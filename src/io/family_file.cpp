@@ -2,6 +2,7 @@
 #include <sysid/io/family_file.hpp>
 #include <sysid/core/errors.hpp>
 #include <sysid/io/atomic_file.hpp>
+#include <sysid/validate/compare.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -177,6 +178,26 @@ FamilyFile family_from_root(const json& root) {
 
 }  // namespace
 
+FamilyMemberEvidence family_member_evidence(const ModelFile& file, const IoData* own, const IoData* validation) {
+  const StateSpace model = named_model(file);
+  FamilyMemberEvidence out{{family_member_model(model, file.K, file.noise_covariance), {}}, {}};
+  if (own == nullptr) return out;
+  CompareOptions co;
+  co.input_offset = file.input_offset;
+  co.output_offset = file.output_offset;
+  if (model.inputs() == 0) {
+    // A simulation without inputs says nothing about a time series.
+    co.predict_steps = 1;
+    out.fit_percent = compare_fit(model, file.K, validation ? *validation : *own, co);
+    return out;
+  }
+  const Experiment& e = own->experiments.front();
+  const CompareResult sim = compare(model, Eigen::MatrixXd(), e, co);
+  out.member.error = frequency_response_error(model.order(), e.u, e.y - sim.y_hat, model.Ts);
+  out.fit_percent = validation ? compare_fit(model, Eigen::MatrixXd(), *validation, co) : sim.fit_percent;
+  return out;
+}
+
 FamilyFile make_family_file(std::vector<FamilyFileMember> members, const std::vector<Condition>& conditions,
                             const ModelFamilyResult& result, const ModelFamilyOptions& options) {
   if (members.empty()) throw std::invalid_argument("make_family_file: need at least one member");
@@ -301,7 +322,10 @@ std::string family_to_json_string(const FamilyFile& f) {
 }
 
 FamilyFile family_from_json_string(const std::string& text, const std::string& source_name) {
-  const json root = parse_json_text(text, source_name);
+  return family_from_json_value(parse_json_text(text, source_name), source_name);
+}
+
+FamilyFile family_from_json_value(const nlohmann::json& root, const std::string& source_name) {
   try {
     return family_from_root(root);
   } catch (const DataError& e) {

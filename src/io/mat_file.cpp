@@ -73,12 +73,9 @@ VarHandle create_strings(const std::string& name, const std::vector<std::string>
   VarHandle cell(Mat_VarCreate(name.c_str(), MAT_C_CELL, MAT_T_CELL, 2, dims, nullptr, 0));
   if (!cell) return cell;
   for (std::size_t k = 0; k < strings.size(); ++k) {
-    std::size_t text_dims[2] = {1, strings[k].size()};
-    static char empty = 0;
-    void* text = strings[k].empty() ? &empty : const_cast<char*>(strings[k].data());
-    matvar_t* element = Mat_VarCreate(nullptr, MAT_C_CHAR, MAT_T_UTF8, 2, text_dims, text, 0);
-    if (element == nullptr) return VarHandle();
-    Mat_VarSetCell(cell.get(), static_cast<int>(k), element);  // the cell owns it from here
+    VarHandle element = create_text(nullptr, strings[k]);
+    if (!element) return VarHandle();
+    Mat_VarSetCell(cell.get(), static_cast<int>(k), element.release());  // the cell owns it from here
   }
   return cell;
 }

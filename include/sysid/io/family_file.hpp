@@ -65,6 +65,21 @@ struct FamilyFile {
 FamilyFile make_family_file(std::vector<FamilyFileMember> members, const std::vector<Condition>& conditions,
                             const ModelFamilyResult& result, const ModelFamilyOptions& options);
 
+/// One member as the family analysis takes it, and its fit.
+struct FamilyMemberEvidence {
+  FamilyMemberModel member;     ///< the model compared (family_member_model) and its response error
+  Eigen::VectorXd fit_percent;  ///< per output; empty without a record
+};
+
+/// Purpose: a member's evidence from its model file and records (one piece of code
+/// for the program and the Python package). A plant: one simulation on its own
+/// record (x0 estimated, the file's offsets) gives the response error
+/// (family/estimation_error.hpp) and, without a validation record, the fit; a time
+/// series (no inputs) is compared through its unit-noise innovation form and
+/// fitted by one-step prediction. `own` null: the model alone (no fit, no
+/// allowance); `validation` null: the fit is on `own`.
+FamilyMemberEvidence family_member_evidence(const ModelFile& file, const IoData* own, const IoData* validation);
+
 /// The family as the house's pretty JSON text (io/model_json.hpp's printer).
 /// Preconditions (std::invalid_argument): consistent sizes (conditions per member,
 /// mode vectors per member).
@@ -72,6 +87,9 @@ std::string family_to_json_string(const FamilyFile& family);
 
 /// Parses family JSON text; `source_name` stands for the file in messages.
 FamilyFile family_from_json_string(const std::string& text, const std::string& source_name);
+
+/// The same from a parsed JSON root (for a reader that looked at "type" first).
+FamilyFile family_from_json_value(const nlohmann::json& root, const std::string& source_name);
 
 FamilyFile read_family_json(const std::string& path);
 void write_family_json(const std::string& path, const FamilyFile& family);
