@@ -21,6 +21,7 @@ namespace {
 
 struct DiagnoseArgs {
   std::string model_path, log_path, json_path, out, validate, plot;
+  std::vector<std::string> output_quantities;
   LogArgs log;
   int max_findings = 4;
   double significance = 0.01;
@@ -136,6 +137,17 @@ void plot_diagnose(const DiagnoseArgs& a, const LoadedLog& log, const DiagnoseRe
   write_plot(fig, a.plot, "diagnose");
 }
 
+/// --output-quantity: one name for every output, or one per output.
+std::vector<OutputQuantity> parse_quantities(const std::vector<std::string>& names, Eigen::Index outputs) {
+  if (names.size() != 1 && static_cast<Eigen::Index>(names.size()) != outputs)
+    throw CLI::ValidationError("--output-quantity", "give one quantity for every output or one per output (" +
+                                                        std::to_string(outputs) + " outputs, " + std::to_string(names.size()) +
+                                                        " given)");
+  std::vector<OutputQuantity> out;
+  for (Eigen::Index i = 0; i < outputs; ++i) out.push_back(parse_output_quantity(names[names.size() == 1 ? 0 : static_cast<std::size_t>(i)]));
+  return out;
+}
+
 void run_diagnose(const DiagnoseArgs& a) {
   const std::string verb = "diagnose";
   std::vector<std::string> sources{a.model_path, a.log_path};
@@ -148,6 +160,7 @@ void run_diagnose(const DiagnoseArgs& a) {
   AugmentedModel nominal = augmented_model_from_file(file, a.model_path);
   nominal.nominal = model_for_sample_time(file, log.data.Ts, a.model_path, verb);
   const Experiment& e = log.data.experiments.front();
+  if (!a.output_quantities.empty()) nominal.output_quantities = parse_quantities(a.output_quantities, e.y.cols());
 
   DiagnoseOptions o;
   o.max_findings = a.max_findings;
@@ -242,6 +255,13 @@ Verb register_diagnose(CLI::App& app) {
                   "residual spectra before/after with the located bands, residual energy by window, and held-out "
                   "time series (.svg or .png; needs gnuplot)")
       ->check(plot_path_validator());
+  cmd->add_option("--output-quantity", args->output_quantities,
+                  "what each output measures: position, velocity, acceleration or other (one for all outputs, or one per "
+                  "output, comma-separated); overrides the model file's output_quantities. Forces inside the plant "
+                  "(friction, springs, constant forces) act on the actuator's position and velocity, which each quantity "
+                  "gives differently; when it is not known diagnose tries each reading and says which it used")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"position", "velocity", "acceleration", "other"}));
   CLI::Option* validate = cmd->add_option("--validate", args->validate, "an independent recording (same columns) to report the fit on");
   cmd->add_option("--max-findings", args->max_findings, "at most this many effects are added")
       ->capture_default_str()

@@ -3,16 +3,19 @@
 #include "sysid/diagnose/diagnose.hpp"
 
 #include <algorithm>
+#include <map>
 #include <memory>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 
+#include "diagnose/detail/detection_context.hpp"
 #include "sysid/core/identification_warnings.hpp"
 #include "sysid/core/parallel_for.hpp"
 #include "sysid/core/poles_zeros.hpp"
 #include "sysid/core/distributions.hpp"
 #include "sysid/validate/compare.hpp"
+#include "sysid/diagnose/physics_kind.hpp"
 #include "sysid/validate/fit.hpp"
 
 namespace sysid {
@@ -26,13 +29,13 @@ double mean_fit(const Eigen::Ref<const Eigen::MatrixXd>& y, const Eigen::Ref<con
 /// (core, blocks) simulated on a recording that starts wherever the machine was
 /// (deviation coordinates), from the initial state that best explains its start
 /// (see RecordingValidation); the state used goes to `x0` when given.
-Eigen::MatrixXd simulate_from_estimated_state(const StateSpace& core, int substeps, const std::vector<PhysicsBlock>& blocks,
-                                              const Eigen::Ref<const Eigen::MatrixXd>& u,
+Eigen::MatrixXd simulate_from_estimated_state(const StateSpace& core, int substeps, const std::vector<OutputQuantity>& quantities,
+                                              const std::vector<PhysicsBlock>& blocks, const Eigen::Ref<const Eigen::MatrixXd>& u,
                                               const Eigen::Ref<const Eigen::MatrixXd>& y, Eigen::VectorXd* x0 = nullptr) {
-  const Eigen::MatrixXd residual = y - AugmentedSimulator(core, substeps, Eigen::VectorXd()).simulate(blocks, u);
+  const Eigen::MatrixXd residual = y - AugmentedSimulator(core, substeps, Eigen::VectorXd(), quantities).simulate(blocks, u);
   const Eigen::VectorXd start = estimate_initial_state(core, Eigen::MatrixXd::Zero(u.rows(), core.inputs()), residual);
   if (x0) *x0 = start;
-  return AugmentedSimulator(core, substeps, start).simulate(blocks, u);
+  return AugmentedSimulator(core, substeps, start, quantities).simulate(blocks, u);
 }
 
 /// Paired test of "the candidate does not improve the simulation" on rows
@@ -68,13 +71,6 @@ double improvement_z(const Eigen::MatrixXd& y, const Eigen::MatrixXd& before, co
   }
   if (!(variance > 0)) return gain > 0 ? std::numeric_limits<double>::infinity() : 0.0;
   return gain / std::sqrt(variance);
-}
-
-std::string fixed(double v, int digits) {
-  std::ostringstream s;
-  s.precision(digits);
-  s << v;
-  return s.str();
 }
 
 std::string channel_name(const std::vector<std::string>& names, long k, const char* prefix) {
@@ -163,12 +159,17 @@ std::vector<std::string> record_warnings(const StateSpace& model, const Eigen::R
 
 /// The falsified band or residual peak a block explains, for the report's location.
 std::optional<std::pair<double, double>> band_of(const PhysicsBlock& b, const MismatchLocation& loc) {
-  if (b.kind != "missing_mode" && b.kind != "periodic_disturbance" && b.kind != "mode_shift") return std::nullopt;
+  // Kinds with a frequency (modes, periodic disturbances) have a place in frequency.
+  const auto& names = b.info().parameters;
+  const auto has = [&](const char* name) {
+    return std::any_of(names.begin(), names.end(), [&](const char* p) { return std::string(p) == name; });
+  };
+  if (!has("freq_hz")) return std::nullopt;
   const double f = b.param("freq_hz");
   if (b.output < static_cast<long>(loc.outputs.size()))
     for (const auto& band : loc.outputs[b.output].bands)
       if (band.lo_hz <= f * 1.02 && f <= band.hi_hz * 1.02) return std::make_pair(band.lo_hz, band.hi_hz);
-  const double halfwidth = b.kind != "periodic_disturbance" ? std::max(3.0 * b.param("damping") * f, 0.5) : 0.5;
+  const double halfwidth = has("damping") ? std::max(3.0 * b.param("damping") * f, 0.5) : 0.5;
   return std::make_pair(f - halfwidth, f + halfwidth);
 }
 
@@ -217,62 +218,62 @@ std::vector<std::pair<double, double>> explained_windows(const MismatchLocation&
 
 std::string finding_summary(const PhysicsBlock& b, const std::vector<std::string>& input_names,
                             const std::vector<std::string>& output_names, double ts) {
-  const std::string in = channel_name(input_names, b.input, "u"), out = channel_name(output_names, b.output, "y");
-  const std::string k = b.kind;
-  if (k == "missing_mode")
-    return "The recordings contain a lightly damped mode at " + fixed(b.param("freq_hz"), 4) + " Hz (damping " +
-           fixed(b.param("damping"), 2) + ") in the path " + in + " -> " + out + " that the simulation lacks.";
-  if (k == "mode_shift") {
-    // (f / f0)^2 - 1 is the modal stiffness-to-mass ratio error the shift implies.
-    const double ratio = b.param("freq_hz") / b.param("nominal_freq_hz");
-    return "The simulation's mode at " + fixed(b.param("nominal_freq_hz"), 4) + " Hz (damping " +
-           fixed(b.param("nominal_damping"), 2) + ") is at " + fixed(b.param("freq_hz"), 4) + " Hz (damping " +
-           fixed(b.param("damping"), 2) + ") in the path " + in + " -> " + out + ": its modal stiffness-to-mass ratio is " +
-           fixed(100.0 * (ratio * ratio - 1.0), 2) + " % off (a mass or stiffness error of the model).";
-  }
-  if (k == "time_delay")
-    return "The response to " + in + " arrives " + fixed(b.param("delay_s") * 1e3, 3) +
-           " ms later than the simulation predicts (a transport or computation delay).";
-  if (k == "gain_error")
-    return "The measured " + out + " is " + fixed(b.param("ratio"), 4) + " times the simulated one (a gain or calibration error).";
-  if (k == "input_lag")
-    return "The actuation of " + in + " lags like a first-order low-pass with a corner at " + fixed(b.param("corner_hz"), 4) +
-           " Hz that the simulation lacks.";
-  if (k == "coulomb_friction")
-    return "A Coulomb friction force of " + fixed(b.param("level"), 3) + " (input units) opposes the motion at " + out +
-           "; it shows near velocity reversals.";
-  if (k == "backlash")
-    return "The actuation of " + in + " has play (backlash) of total width " + fixed(b.param("width"), 3) + " (input units).";
-  if (k == "deadzone")
-    return "The actuation of " + in + " has a dead zone of total width " + fixed(b.param("width"), 3) + " (input units).";
-  if (k == "saturation" && b.param("storage_pole") > 0.0) {
-    // Time constant of the store from its discrete pole: a = exp(-Ts / tau).
-    return "The store that " + in + " fills (a tank, chamber or reservoir with a time constant of " +
-           fixed(-ts / std::log(b.param("storage_pole")), 3) + " s) overflows above the level a steady " + in + " of " +
-           fixed(b.param("limit"), 4) + " (input units, from the operating point) would reach; " +
-           fixed(100.0 * b.param("spill"), 3) + " % of the spill flows on to the next stage.";
-  }
-  if (k == "saturation")
-    return "The actuation of " + in + " saturates at +-" + fixed(b.param("limit"), 4) + " (input units).";
-  if (k == "cubic_stiffness")
-    return std::string(b.param("coefficient") >= 0 ? "A hardening" : "A softening") + " cubic stiffness of " +
-           fixed(b.param("coefficient"), 4) + " (input units per output unit cubed) acts at " + out +
-           "; it shows at the largest amplitudes.";
-  if (k == "hysteresis")
-    return "The actuator of " + in + " shows hysteresis (Bouc-Wen alpha " + fixed(b.param("alpha"), 3) + ").";
-  if (k == "periodic_disturbance")
-    return "A periodic disturbance at " + fixed(b.param("freq_hz"), 5) + " Hz with amplitude " +
-           fixed(b.param("amplitude"), 3) + " (output units) is present in " + out + " and is not caused by the input.";
-  if (k == "offset_drift")
-    return "The sensor " + out + " has an offset of " + fixed(b.param("offset"), 3) + " and a drift of " +
-           fixed(b.param("slope"), 3) + " per second (output units).";
-  if (k == "cross_coupling")
-    return "Input " + in + " moves output " + out + " (coupling gain " + fixed(b.param("gain"), 3) +
-           ") where the simulation has no coupling.";
-  return "Finding of kind " + k + ".";
+  return physics_kind(b.kind).summary(b, {channel_name(input_names, b.input, "u"), channel_name(output_names, b.output, "y"), ts});
 }
 
 namespace {
+
+/// The readings of the outputs to try for the plant's forces when some output's
+/// quantity is unknown: each unknown one read as a position, as a velocity, and
+/// — when the nominal has a direct feedthrough, as a force-to-acceleration path
+/// has — as an acceleration. Empty when every quantity is known.
+std::vector<std::vector<OutputQuantity>> readings_to_try(const std::vector<OutputQuantity>& quantities, const StateSpace& core) {
+  std::vector<std::vector<OutputQuantity>> out;
+  if (std::none_of(quantities.begin(), quantities.end(), [](OutputQuantity q) { return q == OutputQuantity::unknown; }))
+    return out;
+  std::vector<OutputQuantity> tried = {OutputQuantity::position, OutputQuantity::velocity};
+  if (core.D.cwiseAbs().maxCoeff() > 0.0) tried.push_back(OutputQuantity::acceleration);
+  for (OutputQuantity reading : tried) {
+    std::vector<OutputQuantity> r = quantities;
+    for (auto& q : r)
+      if (q == OutputQuantity::unknown) q = reading;
+    out.push_back(r);
+  }
+  return out;
+}
+
+/// Why the outputs were read as `chosen`: the accepted force's selection gain
+/// under that reading against the best force under each other reading.
+std::string reading_note(const std::vector<OutputQuantity>& before, const std::vector<OutputQuantity>& chosen,
+                         const std::vector<JudgedCandidate>& judged, int best, const std::vector<std::string>& output_names) {
+  std::ostringstream s;
+  s << "the quantity of output";
+  bool first = true;
+  for (std::size_t i = 0; i < before.size(); ++i)
+    if (before[i] == OutputQuantity::unknown) {
+      s << (first ? " " : ", ") << channel_name(output_names, static_cast<long>(i), "y") << " (read as " << quantity_name(chosen[i]) << ")";
+      first = false;
+    }
+  const JudgedCandidate& won = judged[static_cast<std::size_t>(best)];
+  s << " was not given (--output-quantity); forces inside the plant were tried under each reading, and "
+    << won.candidate.block.kind << " under this one gained " << fixed(won.selection_gain, 3)
+    << " points on the selection segment";
+  std::map<std::vector<OutputQuantity>, const JudgedCandidate*> best_other;
+  for (const auto& j : judged) {
+    const auto& r = j.candidate.output_quantities;
+    if (r.empty() || r == chosen) continue;
+    auto& slot = best_other[r];
+    if (!slot || j.selection_gain > slot->selection_gain) slot = &j;
+  }
+  for (const auto& [reading, j] : best_other) {
+    std::string name = "?";
+    for (std::size_t i = 0; i < before.size(); ++i)
+      if (before[i] == OutputQuantity::unknown) name = quantity_name(reading[i]);
+    s << "; the best under the " << name << " reading (" << j->candidate.block.kind << ") "
+      << fixed(j->selection_gain, 3);
+  }
+  return s.str();
+}
 
 /// diagnose() and, with `confirm` (deviation coordinates), diagnose_confirmed().
 DiagnoseReport run_diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Eigen::MatrixXd>& u_raw,
@@ -297,14 +298,24 @@ DiagnoseReport run_diagnose(const AugmentedModel& nominal, const Eigen::Ref<cons
   Eigen::VectorXd core_x0 = nominal.x0;
   const int substeps = o.detection.feedback_substeps > 0 ? o.detection.feedback_substeps
                                                           : (model.D.cwiseAbs().maxCoeff() > 0.0 ? 1 : 4);
+  // How the outputs are read by the plant's forces: as the nominal says, and
+  // where it does not, each reading in turn (readings_to_try) until a force
+  // accepted under one fixes it.
+  std::vector<OutputQuantity> quantities = nominal.output_quantities;
+  if (quantities.empty()) quantities.assign(static_cast<std::size_t>(model.outputs()), OutputQuantity::unknown);
   std::unique_ptr<AugmentedSimulator> fast, fine;
+  std::map<std::vector<OutputQuantity>, std::unique_ptr<AugmentedSimulator>> readings;
   auto build_simulators = [&] {
-    fast = std::make_unique<AugmentedSimulator>(core, 1, core_x0);
-    fine = std::make_unique<AugmentedSimulator>(core, substeps, core_x0);
+    fast = std::make_unique<AugmentedSimulator>(core, 1, core_x0, quantities);
+    fine = std::make_unique<AugmentedSimulator>(core, substeps, core_x0, quantities);
+    readings.clear();
+    for (auto& r : readings_to_try(quantities, core)) readings[r] = std::make_unique<AugmentedSimulator>(core, substeps, core_x0, r);
   };
   build_simulators();
   for (const auto& w : fine->warnings()) report.warnings.push_back(w);
   auto simulator_for = [&](const std::vector<Candidate>& set, const std::vector<PhysicsBlock>& fixed) -> const AugmentedSimulator& {
+    for (const auto& c : set)
+      if (!c.output_quantities.empty() && c.output_quantities != quantities) return *readings.at(c.output_quantities);
     bool feedback = std::any_of(fixed.begin(), fixed.end(),
                                 [](const PhysicsBlock& b) { return b.info().stage == BlockStage::plant_feedback; });
     for (const auto& c : set) feedback = feedback || c.substeps > 1;
@@ -313,11 +324,12 @@ DiagnoseReport run_diagnose(const AugmentedModel& nominal, const Eigen::Ref<cons
   std::vector<PhysicsBlock> base = nominal.blocks;  // blocks already in the model stay
   std::vector<Candidate> accepted;
   // The core and every block refitted together (refit_nominal), on rows [0, rows).
-  auto refit_core = [&](const std::vector<Candidate>& blocks, Eigen::Index rows, int steps) {
-    return refit_linear_core(core, core_x0, base, blocks, u.topRows(rows), y.topRows(rows), rows, steps, o.refit);
+  // Both under a reading of the outputs (the model's, or a candidate's).
+  auto refit_core = [&](const std::vector<Candidate>& blocks, Eigen::Index rows, int steps, const std::vector<OutputQuantity>& reading) {
+    return refit_linear_core(core, core_x0, base, blocks, u.topRows(rows), y.topRows(rows), rows, steps, o.refit, reading);
   };
-  auto simulate_refit = [&](const LinearCoreRefitResult& r, int steps, Eigen::Index rows) {
-    return AugmentedSimulator(r.model, steps, r.x0).simulate(combine_blocks(base, r.blocks), u, rows);
+  auto simulate_refit = [&](const LinearCoreRefitResult& r, int steps, Eigen::Index rows, const std::vector<OutputQuantity>& reading) {
+    return AugmentedSimulator(r.model, steps, r.x0, reading).simulate(combine_blocks(base, r.blocks), u, rows);
   };
   // A refit's core and blocks become the model's.
   auto adopt = [&](const LinearCoreRefitResult& r) {
@@ -355,6 +367,7 @@ DiagnoseReport run_diagnose(const AugmentedModel& nominal, const Eigen::Ref<cons
     // (bands, peaks), computed once.
     DetectionData data;
     data.simulator = fine.get();
+    for (const auto& [reading, simulator] : readings) data.plant_readings.push_back(simulator.get());
     data.accepted = fixed;
     data.u = u_fit;
     data.y = y_fit;
@@ -381,13 +394,13 @@ DiagnoseReport run_diagnose(const AugmentedModel& nominal, const Eigen::Ref<cons
     // linear fit (the nominal itself may have been identified on the selection
     // segment, which would favour it).
     Eigen::MatrixXd reference = current, reference_confirm;
-    if (confirm) reference_confirm = simulate_from_estimated_state(core, current_sim.substeps(), fixed, confirm->u, confirm->y);
+    if (confirm) reference_confirm = simulate_from_estimated_state(core, current_sim.substeps(), quantities, fixed, confirm->u, confirm->y);
     if (o.refit_nominal) {
-      const LinearCoreRefitResult alone = refit_core(accepted, fit_rows, current_sim.substeps());
+      const LinearCoreRefitResult alone = refit_core(accepted, fit_rows, current_sim.substeps(), quantities);
       if (alone.refitted) {
-        reference = simulate_refit(alone, current_sim.substeps(), seg.estimation);
+        reference = simulate_refit(alone, current_sim.substeps(), seg.estimation, quantities);
         if (confirm)
-          reference_confirm = simulate_from_estimated_state(alone.model, current_sim.substeps(),
+          reference_confirm = simulate_from_estimated_state(alone.model, current_sim.substeps(), quantities,
                                                             combine_blocks(base, alone.blocks), confirm->u, confirm->y);
       } else if (round == 1) {  // e.g. too large a nominal: the candidates are judged on the nominal as given
         for (const auto& w : alone.warnings) report.warnings.push_back("diagnose: " + w);
@@ -415,9 +428,9 @@ DiagnoseReport run_diagnose(const AugmentedModel& nominal, const Eigen::Ref<cons
       if (o.refit_nominal) {
         std::vector<Candidate> all = accepted;
         all.push_back(j.candidate);
-        LinearCoreRefitResult r = refit_core(all, fit_rows, sim.substeps());
+        LinearCoreRefitResult r = refit_core(all, fit_rows, sim.substeps(), sim.output_quantities());
         if (r.refitted) {
-          after = simulate_refit(r, sim.substeps(), seg.estimation);
+          after = simulate_refit(r, sim.substeps(), seg.estimation, sim.output_quantities());
           j.candidate = r.blocks.back();
           blocks = combine_blocks(base, r.blocks);
           refits[index] = std::move(r);
@@ -430,7 +443,7 @@ DiagnoseReport run_diagnose(const AugmentedModel& nominal, const Eigen::Ref<cons
       }
       j.selection_gain = mean_fit(y.middleRows(scored_from, scored), after.middleRows(scored_from, scored)) - before_fit;
       if (confirm) {
-        const Eigen::MatrixXd after_confirm = simulate_from_estimated_state(*candidate_core, sim.substeps(), blocks, confirm->u, confirm->y);
+        const Eigen::MatrixXd after_confirm = simulate_from_estimated_state(*candidate_core, sim.substeps(), sim.output_quantities(), blocks, confirm->u, confirm->y);
         j.t_statistic = improvement_z(confirm->y, reference_confirm, after_confirm, 0, confirm->y.rows(), o.max_correlation_lag);
       } else {
         j.t_statistic = improvement_z(y, reference, after, seg.fit, seg.estimation, o.max_correlation_lag);
@@ -458,11 +471,21 @@ DiagnoseReport run_diagnose(const AugmentedModel& nominal, const Eigen::Ref<cons
     for (const auto& j : judged) report.considered.push_back(j);
     if (best < 0) break;
     acceptance.push_back(judged[best]);
+    // A force accepted under one reading of the outputs fixes their quantities.
+    auto fix_reading = [&](const JudgedCandidate& j) {
+      const auto& r = j.candidate.output_quantities;
+      if (r.empty() || r == quantities) return;
+      report.reading_note = reading_note(quantities, r, judged, best, model.output_names);
+      quantities = r;
+      build_simulators();
+    };
     if (refits[best]) {
+      fix_reading(judged[best]);
       // The core moves with the blocks (fitted together on the fit segment).
       adopt(*refits[best]);
       report.nominal_refit.applied = true;
     } else {
+      fix_reading(judged[best]);
       accepted.push_back(judged[best].candidate);
       // Confirming, the model kept is the one the recording confirmed.
       if (!confirm)
@@ -476,7 +499,7 @@ DiagnoseReport run_diagnose(const AugmentedModel& nominal, const Eigen::Ref<cons
   if (confirm) {
     if (report.nominal_refit.applied) report.nominal_refit.poles_after = poles(core);
   } else if (!accepted.empty() && report.nominal_refit.applied) {
-    adopt(refit_core(accepted, seg.estimation, simulator_for(accepted, base).substeps()));
+    adopt(refit_core(accepted, seg.estimation, simulator_for(accepted, base).substeps(), quantities));
     report.nominal_refit.poles_after = poles(core);
   } else if (!accepted.empty()) {
     accepted = fit_candidates(simulator_for(accepted, base), base, accepted, u.topRows(seg.estimation),
@@ -488,8 +511,8 @@ DiagnoseReport run_diagnose(const AugmentedModel& nominal, const Eigen::Ref<cons
   auto validation_fit = [&](const std::vector<Candidate>& set, const Eigen::MatrixXd& on_log) -> Eigen::VectorXd {
     if (!confirm) return fit_percent(y.bottomRows(V), on_log.bottomRows(V));
     if (set.empty())
-      return fit_percent(confirm->y, simulate_from_estimated_state(model, fine->substeps(), base, confirm->u, confirm->y));
-    return fit_percent(confirm->y, simulate_from_estimated_state(core, simulator_for(set, base).substeps(),
+      return fit_percent(confirm->y, simulate_from_estimated_state(model, fine->substeps(), quantities, base, confirm->u, confirm->y));
+    return fit_percent(confirm->y, simulate_from_estimated_state(core, simulator_for(set, base).substeps(), quantities,
                                                                  combine_blocks(base, set), confirm->u, confirm->y));
   };
   std::vector<Candidate> so_far;
@@ -533,6 +556,17 @@ DiagnoseReport run_diagnose(const AugmentedModel& nominal, const Eigen::Ref<cons
 
   report.augmented = nominal;
   report.augmented.blocks = combine_blocks(base, accepted);
+  report.augmented.output_quantities = quantities;
+  report.output_quantities = quantities;
+  if (report.reading_note.empty() && !readings_to_try(nominal.output_quantities.empty()
+                                                          ? std::vector<OutputQuantity>(static_cast<std::size_t>(model.outputs()))
+                                                          : nominal.output_quantities,
+                                                      model)
+                                          .empty())
+    report.reading_note =
+        "the quantity of some outputs was not given (--output-quantity): forces inside the plant were tried under each "
+        "reading (position, velocity" + std::string(model.D.cwiseAbs().maxCoeff() > 0.0 ? ", acceleration" : "") +
+        ") and none was accepted, so the quantities stay unknown";
   report.augmented.substeps = simulator_for(accepted, base).substeps();
   if (report.nominal_refit.applied) {
     report.augmented.nominal = core;
@@ -565,7 +599,7 @@ namespace {
 Eigen::VectorXd fit_from_estimated_state(AugmentedModel& model, const Eigen::Ref<const Eigen::MatrixXd>& u,
                                          const Eigen::Ref<const Eigen::MatrixXd>& y) {
   const Recording r = deviation_recording(model, u, y);
-  return fit_percent(r.y, simulate_from_estimated_state(model.nominal, model.substeps, model.blocks, r.u, r.y, &model.x0));
+  return fit_percent(r.y, simulate_from_estimated_state(model.nominal, model.substeps, model.output_quantities, model.blocks, r.u, r.y, &model.x0));
 }
 
 }  // namespace

@@ -80,7 +80,8 @@ FreeParameter around(const std::string& name, double value, double reach) {
 LinearCoreRefitResult refit_linear_core(const StateSpace& nominal, const Eigen::VectorXd& x0,
                                         const std::vector<PhysicsBlock>& fixed, const std::vector<Candidate>& candidates,
                                         const Eigen::Ref<const Eigen::MatrixXd>& u, const Eigen::Ref<const Eigen::MatrixXd>& y,
-                                        Eigen::Index rows, int substeps, const LinearCoreRefitOptions& options) {
+                                        Eigen::Index rows, int substeps, const LinearCoreRefitOptions& options,
+                                        const std::vector<OutputQuantity>& output_quantities) {
   nominal.validate();
   const Eigen::Index n = nominal.order(), m = nominal.inputs(), l = nominal.outputs();
   if (u.rows() != y.rows() || rows <= 0 || rows > u.rows() || u.cols() != m || y.cols() != l)
@@ -170,7 +171,7 @@ LinearCoreRefitResult refit_linear_core(const StateSpace& nominal, const Eigen::
 
   // Never worse than the start as given (a store's own pole, untied, is not in
   // the tied parameterisation): a refit is kept only when it beats that.
-  result.start_cost = simulation_cost(AugmentedSimulator(nominal, substeps, x0), combine_blocks(fixed, candidates), u, y, rows);
+  result.start_cost = simulation_cost(AugmentedSimulator(nominal, substeps, x0, output_quantities), combine_blocks(fixed, candidates), u, y, rows);
   const std::vector<double> linear_start = start;
   double best_cost = result.start_cost;
   for (std::size_t assignment = 0; assignment < assignments; ++assignment) {
@@ -200,7 +201,7 @@ LinearCoreRefitResult refit_linear_core(const StateSpace& nominal, const Eigen::
     const std::function<double(const std::vector<double>&)> cost = [&](const std::vector<double>& z) {
       set(z);
       try {
-        const AugmentedSimulator simulator(model, substeps, x0_model);
+        const AugmentedSimulator simulator(model, substeps, x0_model, output_quantities);
         return simulation_cost(simulator, combine_blocks(fixed, working), u, y, rows);
       } catch (const std::invalid_argument&) {
         return std::numeric_limits<double>::infinity();

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "sysid/core/errors.hpp"
+#include "sysid/diagnose/physics_kind.hpp"
 
 namespace sysid {
 
@@ -50,11 +51,37 @@ long channel_index(const nlohmann::json& j, const std::vector<std::string>& name
   throw DataError(source, 0, 0, where + ": no channel named '" + name + "' (the nominal has " + known + ")");
 }
 
+/// Every parameter the simulation reads, or the DESIGN.md report parameters.
 nlohmann::json params_json(const PhysicsBlock& b, bool reported_only) {
   nlohmann::json p = nlohmann::json::object();
-  const auto& info = b.info();
-  for (const char* name : reported_only ? info.reported : info.parameters) p[name] = b.param(name);
+  if (reported_only) {
+    for (const auto& [name, value] : physics_kind(b.kind).reported(b)) p[name] = value;
+    return p;
+  }
+  for (const char* name : b.info().parameters) p[name] = b.param(name);
   return p;
+}
+
+/// The optional "output_quantities" list (DESIGN.md "Model files"): one known
+/// name per output; empty when absent.
+std::vector<OutputQuantity> output_quantities_from_file(const ModelFile& file, const std::string& source) {
+  std::vector<OutputQuantity> out;
+  if (!file.extra.contains("output_quantities")) return out;
+  const auto& list = file.extra["output_quantities"];
+  const Eigen::Index l = file.model.outputs();
+  if (!list.is_array() || static_cast<Eigen::Index>(list.size()) != l)
+    throw DataError(source, 0, 0, "output_quantities: expected a list of " + std::to_string(l) +
+                                      " names (one per output: position, velocity, acceleration or other)");
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string where = "output_quantities[" + std::to_string(i) + "]";
+    if (!list[i].is_string()) throw DataError(source, 0, 0, where + ": expected a name (position, velocity, acceleration or other)");
+    try {
+      out.push_back(parse_output_quantity(list[i].get<std::string>()));
+    } catch (const std::invalid_argument& e) {
+      throw DataError(source, 0, 0, where + ": " + e.what());
+    }
+  }
+  return out;
 }
 
 nlohmann::json range_json(const std::optional<std::pair<double, double>>& r) {
@@ -70,6 +97,7 @@ AugmentedModel augmented_model_from_file(const ModelFile& file, const std::strin
   m.x0 = file.x0;
   m.input_offset = file.input_offset;
   m.output_offset = file.output_offset;
+  m.output_quantities = output_quantities_from_file(file, source);
   if (file.type != "augmented") return m;
   const auto inputs = names_or_default(file.model.input_names, file.model.inputs(), "u");
   const auto outputs = names_or_default(file.model.output_names, file.model.outputs(), "y");
@@ -127,6 +155,14 @@ ModelFile augmented_model_to_file(const AugmentedModel& model, const nlohmann::j
   f.input_offset = model.input_offset;
   f.output_offset = model.output_offset;
   f.provenance = provenance;
+  if (std::any_of(model.output_quantities.begin(), model.output_quantities.end(),
+                  [](OutputQuantity q) { return q != OutputQuantity::unknown; })) {
+    nlohmann::json list = nlohmann::json::array();
+    // An output whose quantity is still unknown is written as "other": the file
+    // format has no "unknown" (absent means every output unknown).
+    for (OutputQuantity q : model.output_quantities) list.push_back(q == OutputQuantity::unknown ? "other" : quantity_name(q));
+    f.extra["output_quantities"] = list;
+  }
   if (model.blocks.empty()) return f;
   const auto inputs = names_or_default(model.nominal.input_names, model.nominal.inputs(), "u");
   const auto outputs = names_or_default(model.nominal.output_names, model.nominal.outputs(), "y");
@@ -181,8 +217,15 @@ nlohmann::json diagnose_report_to_json(const DiagnoseReport& r, double Ts) {
                         {"summary", f.summary}});
   }
   nlohmann::json considered = nlohmann::json::array();
+  const auto reading_json = [&](const std::vector<OutputQuantity>& q) {
+    nlohmann::json j = nlohmann::json::object();
+    for (std::size_t i = 0; i < q.size() && i < outputs.size(); ++i) j[outputs[i]] = quantity_name(q[i]);
+    return j;
+  };
   for (const auto& c : r.considered)
     considered.push_back({{"kind", c.candidate.block.kind},
+                          {"reading", c.candidate.output_quantities.empty() ? nlohmann::json(nullptr)
+                                                                             : reading_json(c.candidate.output_quantities)},
                           {"input", inputs.at(c.candidate.block.input)},
                           {"output", outputs.at(c.candidate.block.output)},
                           {"round", c.round},
@@ -198,6 +241,8 @@ nlohmann::json diagnose_report_to_json(const DiagnoseReport& r, double Ts) {
                       {"findings", findings},
                       {"fit_before_per_output", per_output(r.fit_before_per_output)},
                       {"fit_after_per_output", per_output(r.fit_after_per_output)},
+                      {"output_quantities", reading_json(r.output_quantities)},
+                      {"output_quantity_note", r.reading_note.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.reading_note)},
                       {"mismatch_detected", r.location.any_mismatch},
                       {"mismatch_tests_fired", r.location.fired},
                       {"candidates", considered},

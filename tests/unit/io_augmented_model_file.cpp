@@ -82,7 +82,7 @@ AugmentedModel every_kind_model() {
       physics_block("time_delay", {{"delay_s", p(1.2e-3, 1.8e-3)}}, 0, 0),
       physics_block("gain_error", {{"ratio", p(1.05, 1.1)}}, 0, 1),
       physics_block("input_lag", {{"corner_hz", p(80, 120)}}, 1, 1),
-      physics_block("coulomb_friction", {{"level", p(0.01, 0.02)}, {"velocity_scale", p(0.5, 1.0)}}, 0, 0),
+      physics_block("coulomb_friction", {{"level", p(0.01, 0.02)}, {"velocity_scale", p(0.5, 1.0)}, {"asymmetry", p(-0.005, 0.005)}}, 0, 0),
       physics_block("backlash", {{"width", p(0.05, 0.1)}}, 1, 0),
       physics_block("deadzone", {{"width", p(0.05, 0.1)}}, 0, 0),
       physics_block("saturation", {{"limit", p(1.5, 2.0)}, {"storage_pole", p(0.9, 0.95)}, {"spill", p(0.2, 0.5)}}, 1, 1),
@@ -93,7 +93,10 @@ AugmentedModel every_kind_model() {
       physics_block("cross_coupling", {{"gain", p(0.1, 0.3)}}, 1, 0),
       physics_block("mode_shift", {{"freq_hz", p(96, 98)}, {"damping", p(0.04, 0.06)}, {"nominal_freq_hz", 95.0},
                                    {"nominal_damping", 0.05}, {"numerator_b0", p(1e4, 2e4)}, {"numerator_b1", p(-5, 5)}}, 0, 1),
+      physics_block("constant_force", {{"force", p(-0.02, -0.01)}}, 1, 1),
   };
+  // The second output read as a velocity: its forces act from its integral.
+  a.output_quantities = {sysid::OutputQuantity::position, sysid::OutputQuantity::velocity};
   return a;
 }
 
@@ -158,6 +161,7 @@ TEST(AugmentedModelFile, EveryKindRoundTripsBitExactAndSimulatesIdentically) {
   EXPECT_EQ(r.x0, a.x0);
   EXPECT_EQ(r.input_offset, a.input_offset);
   EXPECT_EQ(r.output_offset, a.output_offset);
+  EXPECT_EQ(r.output_quantities, a.output_quantities);
 
   // Same model, same arithmetic: the simulations agree to the last bit.
   const MatrixXd u = test_input(1500, 2, 7, 0.5);
@@ -282,6 +286,21 @@ TEST(AugmentedModelFile, ErrorsNameTheBlockAndTheProblem) {
     const std::string m = read_error(j);
     expect_contains(m, "aug.json");
     expect_contains(m, "substeps");
+  }
+}
+
+TEST(AugmentedModelFile, OutputQuantitiesAreCheckedAgainstTheOutputs) {
+  {
+    json j = three_block_json();
+    j["output_quantities"] = {"position", "velocity"};  // the model has one output
+    expect_contains(read_error(j), "output_quantities: expected a list of");
+  }
+  {
+    json j = three_block_json();
+    j["output_quantities"] = {"speed"};
+    const std::string m = read_error(j);
+    expect_contains(m, "output_quantities[0]");
+    expect_contains(m, "'speed'");
   }
 }
 

@@ -5,23 +5,29 @@
 /// as `"type": "augmented"` and what `sysid simulate` runs.
 ///
 /// Method (per sample k, input held over the sample as the nominal's ZOH assumes):
-///  1. actuator: u_j -> saturation -> time_delay (fractional: linear interpolation
-///     between samples, rest before the record) -> deadzone -> backlash (play
-///     operator) -> hysteresis (discrete Bouc-Wen: h[k+1] = h[k] + alpha du -
-///     beta |du| h[k] - gamma du |h[k]|, force = u - h; Ismail, Ikhouane and
-///     Rodellar, Arch. Comput. Methods Eng. 16 (2009), eq. (6) with n = 1);
+///  1. actuator: u_j -> the actuator blocks in chain order (saturation,
+///     time_delay, deadzone, backlash, hysteresis: each kind's `actuate`);
 ///  2. linear core, stepped `substeps` times per sample at h = Ts/substeps:
 ///     the nominal (x+ = Phi x + Gamma f), an input lag per channel (first order,
-///     its exact mean over the step is the force held), a modal term per missing
-///     mode (s^2 + 2 zeta w s + w^2 in parallel, output static_gain w^2 q +
-///     velocity_gain w q', exactly ZOH-discretised); the plant force
-///     f_j = drive_j - sum of plant feedback forces at j, where friction
-///     level tanh(v/velocity_scale) and cubic stiffness coefficient y^3 are
-///     evaluated at the start of each step from the collocated output's position
-///     y_i = C x + modes and velocity (exact, C (A_c x + B_c f), when the nominal
-///     has a continuous equivalent, otherwise a backward difference);
-///  3. sensor: y_i = ratio (C x + D f + modes) + cross_coupling + offset +
-///     slope t + amplitude sin(2 pi f t + phase), t = k Ts from the first sample.
+///     its exact mean over the step is the force held), the parallel modal terms
+///     (missing and moved modes: s^2 + 2 zeta w s + w^2, output static_gain w^2 q
+///     + velocity_gain w q', exactly ZOH-discretised); the plant force
+///     f_j = drive_j + sum of the plant's own forces at j (friction, springs,
+///     constant forces: each kind's `plant_force`), evaluated at the start of
+///     each step from the motion at the collocated output i. That motion is read
+///     as output i's quantity says: a position output gives the position y_i =
+///     C x + modes and the velocity exactly, C (A_c x + B_c f), when the nominal
+///     has a continuous equivalent (otherwise a backward difference); a velocity
+///     output gives the velocity y_i and the position as its exact integral (an
+///     integrator state appended to the continuous equivalent, p' = C_i x +
+///     D_i f, discretised with it); an acceleration output the velocity and the
+///     position as its first and second integrals likewise. Without a continuous
+///     equivalent the integrals are running sums over the steps. Modal terms
+///     enter the integrals by the rectangle rule (their own integral is not a
+///     state);
+///  3. sensor: the sensor blocks in chain order (gain_error scales C x + D f +
+///     modes, then cross_coupling, offset_drift, periodic_disturbance add),
+///     t = k Ts from the first sample.
 /// Substeps > 1 need the nominal's continuous-time equivalent (d2c_zoh); when it
 /// has none (a pole on the negative real axis) one step per sample is used and a
 /// warning says so.
@@ -37,6 +43,18 @@
 
 namespace sysid {
 
+/// What an output's sensor measures (DESIGN.md "Model files": output_quantities).
+/// Forces inside a mechanical plant act on the actuator's position and velocity,
+/// which each quantity gives differently (see the method above); `unknown` is
+/// read as a position by the simulation, and diagnose tries the readings.
+enum class OutputQuantity { unknown, position, velocity, acceleration, other };
+
+/// "position", "velocity", "acceleration", "other", "unknown".
+const char* quantity_name(OutputQuantity q);
+
+/// The quantity named `name` (the four DESIGN.md names); std::invalid_argument otherwise.
+OutputQuantity parse_output_quantity(const std::string& name);
+
 struct AugmentedModel {
   StateSpace nominal;             ///< discrete (Ts > 0)
   Eigen::VectorXd x0;             ///< nominal initial state; empty = zero
@@ -44,6 +62,7 @@ struct AugmentedModel {
   Eigen::VectorXd output_offset;  ///< l, or empty
   std::vector<PhysicsBlock> blocks;
   int substeps = 1;               ///< linear-core steps per sample (>= 1)
+  std::vector<OutputQuantity> output_quantities;  ///< one per output, or empty (all unknown)
 };
 
 /// Simulates one nominal model with any set of blocks; holds what does not depend
@@ -52,8 +71,9 @@ struct AugmentedModel {
 class AugmentedSimulator {
  public:
   /// Preconditions (std::invalid_argument): nominal discrete and valid, substeps >= 1,
-  /// x0 empty or of size n.
-  AugmentedSimulator(const StateSpace& nominal, int substeps = 1, Eigen::VectorXd x0 = {});
+  /// x0 empty or of size n, output_quantities empty (all unknown) or one per output.
+  AugmentedSimulator(const StateSpace& nominal, int substeps = 1, Eigen::VectorXd x0 = {},
+                     std::vector<OutputQuantity> output_quantities = {});
 
   /// Output (samples x l) for input u (N x m, deviation coordinates), first
   /// `samples` rows (-1: all). Preconditions (std::invalid_argument): u has m
@@ -68,13 +88,21 @@ class AugmentedSimulator {
   /// The nominal's continuous-time (ZOH) equivalent, when it exists.
   const std::optional<StateSpace>& continuous_equivalent() const { return m_continuous; }
   const std::vector<std::string>& warnings() const { return m_warnings; }
+  /// How output i is read (unknown when not given).
+  OutputQuantity output_quantity(Eigen::Index i) const;
+  const std::vector<OutputQuantity>& output_quantities() const { return m_quantities; }
 
  private:
   StateSpace m_nominal;
   std::optional<StateSpace> m_continuous;
   StateSpace m_step;  ///< the nominal at step Ts / substeps
+  /// The nominal with the integrator states of the velocity and acceleration
+  /// outputs appended, at step Ts / substeps (empty when no output needs one).
+  StateSpace m_step_integrated;
+  std::vector<Eigen::Index> m_position_state, m_velocity_state;  ///< per output: the appended state holding it, or -1
   int m_substeps = 1;
   Eigen::VectorXd m_x0;
+  std::vector<OutputQuantity> m_quantities;
   std::vector<std::string> m_warnings;
 };
 

@@ -38,6 +38,9 @@ struct Candidate {
   int substeps = 1;             ///< simulation steps per sample the block needs to be accurate
   double detector_score = 0.0;  ///< fraction of the current residual energy its linearised effect explains
   std::string evidence;         ///< the detector's observation in words
+  /// The reading of the outputs the candidate was proposed under (a force
+  /// inside the plant when diagnose tries several readings); empty: the model's.
+  std::vector<OutputQuantity> output_quantities = {};
 };
 
 struct CandidateFitOptions {

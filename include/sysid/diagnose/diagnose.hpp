@@ -136,6 +136,11 @@ struct DiagnoseReport {
   NominalRefit nominal_refit;                      ///< refit_nominal's outcome (not attempted by default)
   AugmentedModel augmented;                        ///< the nominal (refitted, if nominal_refit.applied) with the findings' blocks
   Eigen::MatrixXd simulated_before, simulated_after;  ///< whole record, raw coordinates (for plots)
+  /// How the plant's forces read each output: the nominal's quantities, or where
+  /// it had none, the reading an accepted force was found under (unknown when
+  /// none was); the augmented model carries them.
+  std::vector<OutputQuantity> output_quantities;
+  std::string reading_note;  ///< which reading was used and why, when a quantity was not given
   std::vector<std::string> warnings;
 };
 

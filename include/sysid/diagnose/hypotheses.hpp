@@ -1,7 +1,8 @@
 #pragma once
 /// @file
 /// Purpose: the detectors of `sysid diagnose` (issue 6, scope 2): for every kind
-/// of physics in physics_block.hpp, a detector that scores how much of the
+/// of physics (physics_kind.hpp; each kind's detector is in its own file,
+/// src/diagnose/kinds/<kind>.cpp), a detector that scores how much of the
 /// current simulation residual the effect could explain and proposes start values
 /// and bounds for the fit.
 ///
@@ -17,6 +18,13 @@
 /// their nonlinear parameters, the frequencies taken from the mismatch location
 /// (model-error bands and residual peaks).
 /// Outputs are weighted by 1/std(y_i) so channels count alike.
+/// Channels: sensor kinds on every output; actuator kinds on every input (seen
+/// at output j, or the only output); the plant's forces collocated (input j acts
+/// where output j is measured, or on the only output), once per reading of the
+/// outputs when diagnose tries several (an output's quantity unknown); modal
+/// terms on every path of a single input or onto a single output, collocated
+/// paths otherwise (bounding the candidates of square MIMO); couplings from
+/// input j to every other output i.
 #include <Eigen/Dense>
 #include <string>
 #include <vector>
@@ -42,6 +50,11 @@ struct DetectionOptions {
 /// the detection and fitting data; `current` is the present model's simulation on them.
 struct DetectionData {
   const AugmentedSimulator* simulator = nullptr;  ///< substeps >= feedback_substeps when the plant has feedback candidates
+  /// Simulators differing only in how they read the outputs (their output
+  /// quantities), one per reading to try for the plant's forces that read the
+  /// motion; empty: `simulator`'s reading only. Candidates proposed under a
+  /// reading carry its quantities (Candidate::output_quantities).
+  std::vector<const AugmentedSimulator*> plant_readings;
   std::vector<PhysicsBlock> accepted;             ///< blocks already in the model
   Eigen::MatrixXd u, y;                           ///< rows x m, rows x l
   Eigen::MatrixXd current;                        ///< rows x l

@@ -52,13 +52,14 @@ struct LinearCoreRefitResult {
 
 /// Refits `nominal` (discrete, initial state x0, empty = zero) jointly with the
 /// free parameters of `candidates`, `fixed` blocks held, on rows [0, rows) of
-/// (u, y) in deviation coordinates, simulating with `substeps` steps per sample.
-/// Never worse than the start on those rows.
+/// (u, y) in deviation coordinates, simulating with `substeps` steps per sample
+/// and the outputs read as `output_quantities` say (empty: unknown). Never worse than the start on those rows.
 /// Preconditions (std::invalid_argument): 0 < rows <= u.rows() == y.rows(), sizes
 /// match the nominal.
 LinearCoreRefitResult refit_linear_core(const StateSpace& nominal, const Eigen::VectorXd& x0,
                                         const std::vector<PhysicsBlock>& fixed, const std::vector<Candidate>& candidates,
                                         const Eigen::Ref<const Eigen::MatrixXd>& u, const Eigen::Ref<const Eigen::MatrixXd>& y,
-                                        Eigen::Index rows, int substeps, const LinearCoreRefitOptions& options = {});
+                                        Eigen::Index rows, int substeps, const LinearCoreRefitOptions& options = {},
+                                        const std::vector<OutputQuantity>& output_quantities = {});
 
 }  // namespace sysid

@@ -4,7 +4,8 @@
 /// model (DESIGN.md "diagnose: the report contract"): one PhysicsBlock per effect,
 /// its named parameters, and where it acts.
 ///
-/// Where each kind acts (the equations live in augmented_model.cpp):
+/// Where each kind acts (each kind's equations live in its own file,
+/// src/diagnose/kinds/<kind>.cpp, behind physics_kind.hpp):
 /// - actuator (between the command u_j and the plant force):
 ///   deadzone, saturation, backlash, hysteresis (discrete Bouc-Wen), time_delay,
 ///   input_lag (first-order low-pass, part of the linear core). saturation is
@@ -12,10 +13,12 @@
 ///   above limit of a first-order store the input fills — a tank whose level the
 ///   nominal's pole storage_pole describes — part of whose spill (spill) reaches
 ///   the next stage (a store running dry is not modelled);
-/// - inside the plant (a force fed back around the nominal model at input j,
-///   computed from output i — collocated position — and its velocity):
-///   coulomb_friction, cubic_stiffness; missing_mode is a modal term in parallel
-///   with the nominal path from plant force j to output i;
+/// - inside the plant (a force added to the drive at input j, computed from the
+///   motion at output i — collocated — read as the output's quantity says:
+///   OutputQuantity in augmented_model.hpp): coulomb_friction (optionally
+///   direction-dependent), cubic_stiffness, constant_force; missing_mode and
+///   mode_shift are modal terms in parallel with the nominal path from plant
+///   force j to output i;
 /// - at the sensor (output i): gain_error, periodic_disturbance, offset_drift;
 /// - cross_coupling: the nominal's direct path of input j (to output j) scaled
 ///   and added to output i.
@@ -23,11 +26,12 @@
 /// Parameter names are those of DESIGN.md plus internal ones needed to simulate
 /// (a mode's residue, a sine's phase, the Bouc-Wen shape, the linear part of a
 /// cubic stiffness); `reported` lists the DESIGN.md ones. cubic_stiffness is the
-/// force coefficient y^3 + linear_coefficient y: a nominal identified on data
-/// from the nonlinear machine (a best linear approximation) already holds the
-/// cubic term's average linear stiffness, 3 coefficient E[y^2] for a Gaussian y,
-/// which the linear coefficient takes back out. Units: seconds, hertz, damping ratio; actuator and plant-force
-/// effects in input units, sensor effects in output units.
+/// force coefficient p^3 + linear_coefficient p (p the position): a nominal
+/// identified on data from the nonlinear machine (a best linear approximation)
+/// already holds the cubic term's average linear stiffness, 3 coefficient E[p^2]
+/// for a Gaussian p, which the linear coefficient takes back out. Units: seconds,
+/// hertz, damping ratio; actuator and plant-force effects in input units, sensor
+/// effects in output units.
 #include <map>
 #include <span>
 #include <stdexcept>
@@ -39,6 +43,21 @@ namespace sysid {
 /// Where in the signal chain a kind acts; fixes the simulation order.
 enum class BlockStage { actuator, plant_feedback, plant_parallel, sensor, coupling };
 
+/// A parameter whose value says whether the effect is there at all, and its value
+/// when it is not (zero friction, unit gain, the nominal's own frequency). A
+/// finding is reported under its kind's name only when at least one defining
+/// parameter differs from its null value by more than its uncertainty allows
+/// (DESIGN.md "diagnose"). The null value is `null_value`, or the block's own
+/// value of `null_parameter` when that is set (a moved mode's nominal
+/// frequency). `reciprocal`: the effect vanishes as the parameter grows without
+/// bound (a lag's corner), so 1/value is tested against 0.
+struct DefiningParameter {
+  const char* name;
+  double null_value = 0.0;
+  const char* null_parameter = nullptr;
+  bool reciprocal = false;
+};
+
 /// Static description of a kind of physics.
 struct BlockKindInfo {
   const char* kind;                      ///< DESIGN.md name, e.g. "cubic_stiffness"
@@ -46,61 +65,31 @@ struct BlockKindInfo {
   std::vector<const char*> parameters;   ///< every parameter the simulation reads, in a fixed order
   std::vector<const char*> reported;     ///< the DESIGN.md report parameters (a subset)
   const char* description;               ///< plain words, for summaries
+  std::vector<DefiningParameter> defining;  ///< empty: no single parameter says "absent" (a clipping level)
+  int chain_order = 0;                   ///< order within the actuator and sensor stages (lower first)
+  /// Parameters that refine the kind (a friction's difference between the two
+  /// directions): each is held at its null value, and the finding reported
+  /// without it, unless the data show it differs from that by more than its
+  /// uncertainty allows.
+  std::vector<DefiningParameter> optional_terms = {};
 };
 
-/// The table of all kinds, in DESIGN.md order.
-inline const std::vector<BlockKindInfo>& block_kinds() {
-  static const std::vector<BlockKindInfo> kinds = {
-      {"missing_mode", BlockStage::plant_parallel, {"freq_hz", "damping", "static_gain", "velocity_gain"},
-       {"freq_hz", "damping"}, "a lightly damped mode the simulation lacks"},
-      {"time_delay", BlockStage::actuator, {"delay_s"}, {"delay_s"}, "a delay between command and actuation"},
-      {"gain_error", BlockStage::sensor, {"ratio"}, {"ratio"}, "a gain error (measured / nominal)"},
-      {"input_lag", BlockStage::actuator, {"corner_hz"}, {"corner_hz"}, "a first-order lag in the actuator"},
-      {"coulomb_friction", BlockStage::plant_feedback, {"level", "velocity_scale"}, {"level"},
-       "Coulomb friction opposing the motion"},
-      {"backlash", BlockStage::actuator, {"width"}, {"width"}, "play (backlash) in the actuation"},
-      {"deadzone", BlockStage::actuator, {"width"}, {"width"}, "a dead zone in the actuation"},
-      // storage_pole and spill were added after the first files were written:
-      // optional in files (optional_parameter_default).
-      {"saturation", BlockStage::actuator, {"limit", "storage_pole", "spill"}, {"limit"},
-       "saturation of the actuation"},
-      {"cubic_stiffness", BlockStage::plant_feedback, {"coefficient", "linear_coefficient"}, {"coefficient"},
-       "a hardening (cubic) stiffness"},
-      {"hysteresis", BlockStage::actuator, {"alpha", "beta", "gamma"}, {}, "hysteresis (Bouc-Wen) in the actuator"},
-      {"periodic_disturbance", BlockStage::sensor, {"freq_hz", "amplitude", "phase_rad"}, {"freq_hz", "amplitude"},
-       "a periodic disturbance not caused by the input"},
-      {"offset_drift", BlockStage::sensor, {"offset", "slope"}, {"offset", "slope"}, "a sensor offset and drift"},
-      {"cross_coupling", BlockStage::coupling, {"gain"}, {}, "coupling from another input the simulation lacks"},
-      // Added after the 13 DESIGN.md kinds ("new kinds may be added"): a mode the
-      // simulation has, at another frequency or damping in the recordings — the
-      // first sign of a mass or stiffness error, e.g. in a finite-element model.
-      // The nominal mode's contribution (numerator b1 s + b0 over its own
-      // denominator, from the nominal's modal decomposition) is taken out and put
-      // back with the new frequency and damping.
-      {"mode_shift", BlockStage::plant_parallel,
-       {"freq_hz", "damping", "nominal_freq_hz", "nominal_damping", "numerator_b0", "numerator_b1"},
-       {"freq_hz", "damping", "nominal_freq_hz", "nominal_damping"},
-       "a mode of the simulation at another frequency or damping"},
-  };
-  return kinds;
-}
+/// Every kind's description, in DESIGN.md order (served by the kinds' registry,
+/// physics_kind.hpp).
+const std::vector<BlockKindInfo>& block_kinds();
 
-/// The table entry of `kind`; std::invalid_argument for an unknown kind.
-inline const BlockKindInfo& block_kind_info(const std::string& kind) {
-  for (const auto& k : block_kinds())
-    if (kind == k.kind) return k;
-  throw std::invalid_argument("unknown physics kind '" + kind + "'");
-}
+/// The description of `kind`; std::invalid_argument for an unknown kind.
+const BlockKindInfo& block_kind_info(const std::string& kind);
 
-/// One effect added to the nominal model.
 struct PhysicsBlock;
 
 /// Parameters a model file may omit because they were added to a kind after
 /// files with it were written, and their value then (keeping those files'
-/// meaning): saturation's storage_pole = 0 (no store: an amplifier) and
-/// spill = 0. False for any other parameter.
-inline bool optional_parameter_default(const PhysicsBlock& block, const std::string& name, double& value);
+/// meaning), e.g. saturation's storage_pole = 0 (no store: an amplifier). False
+/// for any other parameter.
+bool optional_parameter_default(const PhysicsBlock& block, const std::string& name, double& value);
 
+/// One effect added to the nominal model.
 struct PhysicsBlock {
   std::string kind;                      ///< a name from block_kinds()
   long input = 0;                        ///< the input channel it acts on (actuator, plant, coupling source)
@@ -118,14 +107,5 @@ struct PhysicsBlock {
   }
   const BlockKindInfo& info() const { return block_kind_info(kind); }
 };
-
-inline bool optional_parameter_default(const PhysicsBlock& block, const std::string& name, double& value) {
-  if (block.kind != "saturation") return false;
-  if (name == "storage_pole" || name == "spill") {
-    value = 0.0;
-    return true;
-  }
-  return false;
-}
 
 }  // namespace sysid
