@@ -84,6 +84,13 @@ std::vector<OutputQuantity> output_quantities_from_file(const ModelFile& file, c
   return out;
 }
 
+/// name -> value, a non-finite value (a parameter the data cannot identify) as null.
+nlohmann::json finite_or_null(const std::map<std::string, double>& values) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& [name, value] : values) j[name] = std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
+  return j;
+}
+
 nlohmann::json range_json(const std::optional<std::pair<double, double>>& r) {
   if (!r) return nullptr;
   return nlohmann::json::array({r->first, r->second});
@@ -214,6 +221,8 @@ nlohmann::json diagnose_report_to_json(const DiagnoseReport& r, double Ts) {
                           {"selection_gain_points", f.selection_gain},
                           {"t_statistic", f.t_statistic}}},
                         {"model_params", params_json(b, false)},
+                        {"uncertainty", finite_or_null(f.uncertainty)},
+                        {"parameter_evidence", f.parameter_evidence},
                         {"summary", f.summary}});
   }
   nlohmann::json considered = nlohmann::json::array();
@@ -234,6 +243,9 @@ nlohmann::json diagnose_report_to_json(const DiagnoseReport& r, double Ts) {
                           {"t_statistic", c.t_statistic},
                           {"t_threshold", c.t_threshold},
                           {"significant", c.significant},
+                          {"standard_errors", finite_or_null(c.standard_errors)},
+                          {"parameters_significant", c.parameters_significant},
+                          {"parameter_evidence", c.parameter_evidence},
                           {"params", params_json(c.candidate.block, false)}});
   nlohmann::json j = {{"fit_before", r.fit_before},
                       {"fit_after", r.fit_after},
@@ -243,6 +255,12 @@ nlohmann::json diagnose_report_to_json(const DiagnoseReport& r, double Ts) {
                       {"fit_after_per_output", per_output(r.fit_after_per_output)},
                       {"output_quantities", reading_json(r.output_quantities)},
                       {"output_quantity_note", r.reading_note.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.reading_note)},
+                      {"closed_loop",
+                       {{"tested", r.closed_loop.tested},
+                        {"detected", r.closed_loop.feedback_detected},
+                        {"statistic", r.closed_loop.statistic},
+                        {"threshold", r.closed_loop.threshold},
+                        {"evidence", r.closed_loop.evidence}}},
                       {"mismatch_detected", r.location.any_mismatch},
                       {"mismatch_tests_fired", r.location.fired},
                       {"candidates", considered},

@@ -353,8 +353,9 @@ TEST(AugmentedModelFile, ReportHasTheDesignKeysAndUnits) {
   // corrected model about 99 % (the noise floor).
   EXPECT_GT(j["fit_after"].get<double>() - j["fit_before"].get<double>(), 5.0);
 
-  const std::set<std::string> finding_keys{"kind", "params", "fit_before", "fit_after", "location", "evidence",
-                                           "summary", "model_params"};  // model_params: documented extension
+  // model_params and parameter_evidence: documented extensions; uncertainty: DESIGN.md.
+  const std::set<std::string> finding_keys{"kind",    "params",       "fit_before", "fit_after",          "location",
+                                           "evidence", "summary",     "model_params", "parameter_evidence", "uncertainty"};
   const std::set<std::string> location_keys{"freq_hz", "time_s", "input", "output"};
   for (const auto& f : j["findings"]) {
     std::set<std::string> keys;
@@ -377,6 +378,13 @@ TEST(AugmentedModelFile, ReportHasTheDesignKeysAndUnits) {
       EXPECT_TRUE(v.is_number()) << k;
     }
     EXPECT_EQ(got, reported) << f.dump(2);
+    // uncertainty: a standard error per reported parameter (DESIGN.md).
+    std::set<std::string> with_error;
+    for (const auto& [k, v] : f["uncertainty"].items()) {
+      with_error.insert(k);
+      EXPECT_TRUE(v.is_number() && v.get<double>() >= 0.0) << k;
+    }
+    EXPECT_EQ(with_error, reported) << f.dump(2);
   }
   const json& first = j["findings"][0];
   ASSERT_EQ(first["kind"], "gain_error") << j.dump(2);
@@ -384,6 +392,11 @@ TEST(AugmentedModelFile, ReportHasTheDesignKeysAndUnits) {
   // samples at 1 % noise is within ~1e-3 of 1.1; 2 % leaves room for the fit's
   // tolerance and a unit mistake (110 or 0.1) cannot pass.
   EXPECT_NEAR(first["params"]["ratio"].get<double>(), 1.1, 0.022);
+  // Its standard error at 1 % noise on 4000 samples is of order 1e-4: small, not zero.
+  EXPECT_GT(first["uncertainty"]["ratio"].get<double>(), 0.0);
+  EXPECT_LT(first["uncertainty"]["ratio"].get<double>(), 0.01);
+  EXPECT_TRUE(j["closed_loop"].is_object() && j["closed_loop"]["detected"].is_boolean());
+  EXPECT_TRUE(j["output_quantities"].is_object());
 }
 
 }  // namespace test_unit_io_augmented_model_file

@@ -53,6 +53,7 @@
 /// persistent noise; with noise correlated over 1/15 of the recording, 2 % of
 /// null runs gave a finding at the 1 % level, as in the three-part mode (README).
 #include <Eigen/Dense>
+#include <map>
 #include <optional>
 #include <string>
 #include <utility>
@@ -60,6 +61,7 @@
 
 #include "sysid/diagnose/augmented_model.hpp"
 #include "sysid/diagnose/candidate_fit.hpp"
+#include "sysid/diagnose/feedback_check.hpp"
 #include "sysid/diagnose/hypotheses.hpp"
 #include "sysid/diagnose/linear_core_refit.hpp"
 #include "sysid/diagnose/mismatch_location.hpp"
@@ -112,6 +114,13 @@ struct JudgedCandidate {
   /// candidate of a round is tested there; the others' values are for reading).
   double t_statistic = 0;
   double t_threshold = 0;      ///< what it had to exceed
+  /// Standard errors of its free parameters on the rows it was fitted on
+  /// (parameter_uncertainty.hpp), and whether a defining parameter differs from
+  /// its null value by more than two of them (DESIGN.md: otherwise the finding
+  /// may not be reported under its kind's name); `parameter_evidence` in words.
+  std::map<std::string, double> standard_errors;
+  bool parameters_significant = true;
+  std::string parameter_evidence;
   bool significant = false;
   int round = 0;
 };
@@ -123,6 +132,11 @@ struct Finding {
   std::optional<std::pair<double, double>> band_hz;          ///< where in frequency, when it has a place there
   std::vector<std::pair<double, double>> time_windows_s;     ///< flagged residual windows it explains, if any
   std::string summary;  ///< one sentence in plain engineering words
+  /// Standard error of each reported parameter (DESIGN.md "uncertainty"), from
+  /// the final fit; `parameter_evidence` says how far its defining parameter is
+  /// from its null value in standard errors.
+  std::map<std::string, double> uncertainty;
+  std::string parameter_evidence;
 };
 
 struct DiagnoseReport {
@@ -133,6 +147,12 @@ struct DiagnoseReport {
   std::vector<Finding> findings;                   ///< ranked, most important first; empty = no significant mismatch
   std::vector<JudgedCandidate> considered;         ///< every candidate fitted, all rounds
   MismatchLocation location;                       ///< the nominal's mismatch on the estimation part
+  /// Whether the inputs react to the outputs' noise on the estimation part (a
+  /// closed loop: the logged input is a controller's output). The nominal is
+  /// still simulated open-loop from the logged input, which stays valid; the
+  /// report says so (a warning), because the noise fed back into the input
+  /// correlates with it and can bias the fitted parameters of small effects.
+  OutputFeedbackCheck closed_loop;
   NominalRefit nominal_refit;                      ///< refit_nominal's outcome (not attempted by default)
   AugmentedModel augmented;                        ///< the nominal (refitted, if nominal_refit.applied) with the findings' blocks
   Eigen::MatrixXd simulated_before, simulated_after;  ///< whole record, raw coordinates (for plots)

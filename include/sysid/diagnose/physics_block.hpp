@@ -16,7 +16,7 @@
 /// - inside the plant (a force added to the drive at input j, computed from the
 ///   motion at output i — collocated — read as the output's quantity says:
 ///   OutputQuantity in augmented_model.hpp): coulomb_friction (optionally
-///   direction-dependent), cubic_stiffness, constant_force; missing_mode and
+///   direction-dependent: asymmetry r in [-1, 1], levels level (1 +- r)), cubic_stiffness, constant_force; missing_mode and
 ///   mode_shift are modal terms in parallel with the nominal path from plant
 ///   force j to output i;
 /// - at the sensor (output i): gain_error, periodic_disturbance, offset_drift;

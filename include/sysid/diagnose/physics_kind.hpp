@@ -29,6 +29,7 @@
 namespace sysid {
 
 struct Candidate;
+struct CandidateUncertainty;
 class DetectionContext;
 
 /// A modal term in parallel with the nominal path from plant force `input` to
@@ -95,6 +96,10 @@ class PhysicsKind {
   /// The DESIGN.md report parameters of a fitted block and their values (default:
   /// info().reported as they are).
   virtual std::map<std::string, double> reported(const PhysicsBlock& block) const;
+  /// The standard error of each reported parameter of a fitted candidate, from
+  /// its free parameters' covariance (default: a free parameter's own, 0 for a
+  /// held one — a nominal frequency is not estimated).
+  virtual std::map<std::string, double> reported_uncertainty(const Candidate& fitted, const CandidateUncertainty& u) const;
 
   /// Candidates of this kind on the path input -> output (the channels the
   /// kind's stage asks for: see propose_candidates), scored on the residual.

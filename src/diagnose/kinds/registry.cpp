@@ -3,6 +3,9 @@
 // SYSID_PHYSICS_KINDS below (DESIGN.md order, new kinds at the end).
 #include "sysid/diagnose/physics_kind.hpp"
 
+#include "sysid/diagnose/candidate_fit.hpp"
+#include "sysid/diagnose/parameter_uncertainty.hpp"
+
 #include <stdexcept>
 
 #define SYSID_PHYSICS_KINDS(X)                                                                                        \
@@ -47,6 +50,16 @@ bool optional_parameter_default(const PhysicsBlock& block, const std::string& na
 std::map<std::string, double> PhysicsKind::reported(const PhysicsBlock& block) const {
   std::map<std::string, double> out;
   for (const char* name : info().reported) out[name] = block.param(name);
+  return out;
+}
+
+std::map<std::string, double> PhysicsKind::reported_uncertainty(const Candidate& fitted, const CandidateUncertainty& u) const {
+  std::map<std::string, double> out;
+  for (const auto& [name, value] : reported(fitted.block)) {
+    (void)value;
+    const auto se = u.standard_errors.find(name);
+    out[name] = se != u.standard_errors.end() ? se->second : 0.0;
+  }
   return out;
 }
 
