@@ -217,6 +217,8 @@ nlohmann::json diagnose_report_to_json(const DiagnoseReport& r, double Ts) {
                           {"output", outputs.at(b.output)}}},
                         {"evidence",
                          {{"detector", f.candidate.evidence},
+                          {"alternative", f.alternative},
+                          {"where", f.where.empty() ? nlohmann::json(nullptr) : nlohmann::json(f.where)},
                           {"detector_score", f.candidate.detector_score},
                           {"selection_gain_points", f.selection_gain},
                           {"t_statistic", f.t_statistic}}},

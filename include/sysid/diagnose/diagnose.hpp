@@ -137,6 +137,10 @@ struct Finding {
   /// from its null value in standard errors.
   std::map<std::string, double> uncertainty;
   std::string parameter_evidence;
+  /// Why this kind and not another: the best other kind of its round and its
+  /// selection gain, and, for kinds another can mimic (friction, a dead zone),
+  /// where in time the residual it explains lives.
+  std::string alternative, where;
 };
 
 struct DiagnoseReport {

@@ -59,6 +59,16 @@ struct SensorInputs {
   const Eigen::VectorXd& time_s;
 };
 
+/// What a fitted finding's evidence may look at (estimation rows): the residual
+/// before it, the motion at its output as simulated before it (velocity per the
+/// output's reading), the command at its input.
+struct FindingSignals {
+  const Eigen::VectorXd& residual_before;
+  const Eigen::VectorXd& velocity;
+  const Eigen::VectorXd& command;
+  double Ts = 0.0;
+};
+
 /// Channel names and the sample time, for a finding's sentence.
 struct SummaryContext {
   std::string input, output;  ///< the block's channel names
@@ -104,6 +114,10 @@ class PhysicsKind {
   /// Candidates of this kind on the path input -> output (the channels the
   /// kind's stage asks for: see propose_candidates), scored on the residual.
   virtual void propose(const DetectionContext& context, long input, long output, std::vector<Candidate>& out) const = 0;
+  /// Where in time the residual this kind explains lives, in words, for kinds
+  /// that another kind can mimic (friction at velocity reversals, a dead zone at
+  /// the command's zero crossings); empty for the others.
+  virtual std::string where_evidence(const PhysicsBlock& /*block*/, const FindingSignals& /*signals*/) const { return {}; }
   /// One sentence in plain engineering words about a fitted block.
   virtual std::string summary(const PhysicsBlock& block, const SummaryContext& context) const = 0;
 };

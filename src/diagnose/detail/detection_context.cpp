@@ -94,22 +94,28 @@ Eigen::MatrixXd DetectionContext::sensitivities(const PhysicsBlock& block,
   return G;
 }
 
-Eigen::VectorXd DetectionContext::position(long output) const {
-  const Eigen::VectorXd y = m_data.current.col(output);
-  switch (quantity(output)) {
-    case OutputQuantity::velocity: return integral(y, Ts());
-    case OutputQuantity::acceleration: return integral(integral(y, Ts()), Ts());
+Eigen::VectorXd reading_position(const Eigen::VectorXd& y, OutputQuantity q, double Ts) {
+  switch (q) {
+    case OutputQuantity::velocity: return integral(y, Ts);
+    case OutputQuantity::acceleration: return integral(integral(y, Ts), Ts);
     default: return y;
   }
 }
 
-Eigen::VectorXd DetectionContext::velocity(long output) const {
-  const Eigen::VectorXd y = m_data.current.col(output);
-  switch (quantity(output)) {
+Eigen::VectorXd reading_velocity(const Eigen::VectorXd& y, OutputQuantity q, double Ts) {
+  switch (q) {
     case OutputQuantity::velocity: return y;
-    case OutputQuantity::acceleration: return integral(y, Ts());
-    default: return difference(y, Ts());
+    case OutputQuantity::acceleration: return integral(y, Ts);
+    default: return difference(y, Ts);
   }
+}
+
+Eigen::VectorXd DetectionContext::position(long output) const {
+  return reading_position(m_data.current.col(output), quantity(output), Ts());
+}
+
+Eigen::VectorXd DetectionContext::velocity(long output) const {
+  return reading_velocity(m_data.current.col(output), quantity(output), Ts());
 }
 
 Candidate DetectionContext::linearised(PhysicsBlock block, const std::string& name, double p0, double delta,

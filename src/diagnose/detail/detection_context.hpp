@@ -86,6 +86,13 @@ class DetectionContext {
   ModalBasis m_basis;
 };
 
+/// The motion a simulated output y (one column) carries, read as `q`: its
+/// velocity and its position (a velocity integrated once for the position, an
+/// acceleration once and twice; running integrals with their mean removed, a
+/// position differenced for the velocity).
+Eigen::VectorXd reading_velocity(const Eigen::VectorXd& y, OutputQuantity q, double Ts);
+Eigen::VectorXd reading_position(const Eigen::VectorXd& y, OutputQuantity q, double Ts);
+
 /// A block of `kind` on the path input -> output, every parameter 0.
 PhysicsBlock make_block(const std::string& kind, long input, long output);
 

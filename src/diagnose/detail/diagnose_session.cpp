@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "diagnose/detail/detection_context.hpp"
+#include "diagnose/detail/residual_events.hpp"
 #include "sysid/core/discretize.hpp"
 #include "sysid/core/errors.hpp"
 #include "sysid/core/identification_warnings.hpp"
@@ -606,6 +607,21 @@ void DiagnoseSession::hold_unneeded_optional_terms(Eigen::Index rows) {
   }
 }
 
+std::string DiagnoseSession::best_alternative(const JudgedCandidate& accepted) const {
+  const JudgedCandidate* best = nullptr;
+  for (const auto& j : m_report.considered)
+    if (j.round == accepted.round && j.candidate.block.kind != accepted.candidate.block.kind &&
+        (!best || j.selection_gain > best->selection_gain))
+      best = &j;
+  if (!best) return "no other kind was fitted in its round";
+  return "in its round (" + std::to_string(accepted.round) + ") it gained " + fixed(accepted.selection_gain, 3) +
+         " points on the selection data; the best other kind, " + best->candidate.block.kind + ", " +
+         fixed(best->selection_gain, 3) + (best->significant ? "" : " (not accepted: " + std::string(
+                                                                        !best->parameters_significant ? "its parameters are not significant"
+                                                                        : best->t_statistic <= best->t_threshold ? "not significant"
+                                                                                                                 : "a smaller gain") + ")");
+}
+
 void DiagnoseSession::order_by_importance(std::vector<CandidateUncertainty>& uncertainty) {
   if (m_accepted.size() < 2) return;
   const Eigen::Index rows = m_seg.estimation;
@@ -700,6 +716,15 @@ DiagnoseReport DiagnoseSession::finish(
     f.time_windows_s = explained_windows(report.location, m_log.y, m_y_nominal, previous, next, m_seg.estimation, Ts);
     f.summary = finding_summary(c.block, model.input_names, model.output_names, Ts);
     f.uncertainty = physics_kind(c.block.kind).reported_uncertainty(c, uncertainty[k]);
+    f.alternative = best_alternative(m_acceptance[k]);
+    {
+      const Eigen::Index E = m_seg.estimation;
+      const Eigen::VectorXd residual = (m_log.y.col(c.block.output) - previous.col(c.block.output)).head(E);
+      const Eigen::VectorXd velocity =
+          reading_velocity(previous.col(c.block.output).head(E), m_quantities[static_cast<std::size_t>(c.block.output)], Ts);
+      const Eigen::VectorXd command = m_log.u.col(c.block.input).head(E);
+      f.where = physics_kind(c.block.kind).where_evidence(c.block, {residual, velocity, command, Ts});
+    }
     (void)defining_parameter_differs(c, uncertainty[k].standard_errors, kParameterZ, &f.parameter_evidence);
     report.findings.push_back(f);
     previous = next;

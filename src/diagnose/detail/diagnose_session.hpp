@@ -125,6 +125,8 @@ class DiagnoseSession {
   /// estimation) (the order found is the order of the search, not of importance:
   /// a later finding may explain more once an earlier one is refitted with it).
   void order_by_importance(std::vector<CandidateUncertainty>& uncertainty);
+  /// The best other kind fitted in the round a finding was accepted in, in words.
+  std::string best_alternative(const JudgedCandidate& accepted) const;
 
   const AugmentedModel& m_nominal;
   const DiagnoseOptions& m_o;

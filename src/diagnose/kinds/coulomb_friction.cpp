@@ -3,6 +3,7 @@
 // guide's preload, a belt's tension). Smooth sign: level tanh(v / velocity_scale),
 // so the simulation stays an ODE with bounded slope.
 #include "diagnose/detail/detection_context.hpp"
+#include "diagnose/detail/residual_events.hpp"
 #include "sysid/diagnose/parameter_uncertainty.hpp"
 
 #include <algorithm>
@@ -99,6 +100,15 @@ class CoulombFriction final : public PhysicsKind {
       out[sign > 0 ? "level_positive" : "level_negative"] = std::sqrt(std::max(0.0, gradient.dot(C * gradient)));
     }
     return out;
+  }
+  /// Friction and a dead zone both flatten the response; the residual they
+  /// explain sits at different instants (residual_events.hpp).
+  std::string where_evidence(const PhysicsBlock&, const FindingSignals& s) const override {
+    const ResidualEvents e = residual_events(s.residual_before, s.velocity, s.command);
+    if (!e.tested) return describe(e, s.Ts);
+    const bool own = e.near_reversals >= e.near_crossings;
+    return describe(e, s.Ts) + (own ? ": it lives at the velocity reversals, where friction acts"
+                                    : ": it lives nearer the zero crossings of the command, where a dead zone would act, yet this kind fitted better");
   }
   std::string summary(const PhysicsBlock& b, const SummaryContext& s) const override {
     const double level = b.param("level"), r = b.param("asymmetry");

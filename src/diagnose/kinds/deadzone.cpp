@@ -1,6 +1,7 @@
 // deadzone: no actuation while the command is within +-width/2 of zero, the
 // command less width/2 beyond.
 #include "diagnose/detail/detection_context.hpp"
+#include "diagnose/detail/residual_events.hpp"
 
 namespace sysid {
 
@@ -28,6 +29,15 @@ class Deadzone final : public PhysicsKind {
     const Eigen::VectorXd uj = c.data().u.col(j);
     out.push_back(c.linearised(make_block("deadzone", j, i), "width", 0.0, 0.01 * rms(uj), {"width", 0.0, uj.cwiseAbs().maxCoeff()},
                                1, "a dead band around zero input"));
+  }
+  /// Friction and a dead zone both flatten the response; the residual they
+  /// explain sits at different instants (residual_events.hpp).
+  std::string where_evidence(const PhysicsBlock&, const FindingSignals& s) const override {
+    const ResidualEvents e = residual_events(s.residual_before, s.velocity, s.command);
+    if (!e.tested) return describe(e, s.Ts);
+    const bool own = e.near_crossings >= e.near_reversals;
+    return describe(e, s.Ts) + (own ? ": it lives at the zero crossings of the command, where a dead zone acts"
+                                    : ": it lives nearer the velocity reversals, where friction would act, yet this kind fitted better");
   }
   std::string summary(const PhysicsBlock& b, const SummaryContext& s) const override {
     return "The actuation of " + s.input + " has a dead zone of total width " + fixed(b.param("width"), 3) + " (input units).";
