@@ -214,7 +214,11 @@ void run_diagnose(const DiagnoseArgs& a) {
     << (report.location.any_mismatch ? "mismatch (" + join(report.location.fired) + ")" : "no significant mismatch") << "\n";
   s << "validation (" << j["validation"].get<std::string>() << "): fit " << fmt(j["fit_before"].get<double>(), 4) << " -> "
     << fmt(j["fit_after"].get<double>(), 4) << " %\n";
-  if (report.findings.empty()) s << "findings: none — the simulation is consistent with the recording\n";
+  if (report.findings.empty() && !report.location.any_mismatch)
+    s << "findings: none — the simulation is consistent with the recording\n";
+  else if (report.findings.empty())
+    s << "findings: none that the library's kinds of physics explain — but the recording disagrees with the simulation ("
+      << join(report.location.fired) << "): what is missing is not among the kinds diagnose knows\n";
   else s << "findings (most important first):\n";
   for (std::size_t k = 0; k < report.findings.size(); ++k) s << describe_finding(k + 1, report.findings[k]);
   for (const auto& w : report.warnings) warn(verb, w);

@@ -213,9 +213,10 @@ std::vector<std::pair<double, double>> explained_windows(const MismatchLocation&
 /// a mass's acceleration at once (a direct feedthrough: relative degree 0), its
 /// velocity one integration later (relative degree 1) and its position two. At
 /// the Nyquist frequency w the continuous equivalent's path is about D + CB/(jw)
-/// + CAB/(jw)^2. The degree counts only when one term dominates those before it
-/// 20-fold (and, for degree 0 or 1, those after it): then degree 0 allows only an
-/// acceleration, 1 only a velocity, 2 a position or a velocity (through a spring).
+/// + CAB/(jw)^2. The degree counts only when one term dominates the others
+/// 20-fold: then degree 0 allows only an acceleration, 1 only a velocity, 2 only
+/// a position (the plant's forces are collocated with their output: a velocity
+/// behind a spring is not a collocated reading).
 /// Otherwise — an identified model, whose feedthrough and first Markov parameter
 /// carry noise — and without a continuous equivalent, every reading is plausible.
 bool reading_plausible(const StateSpace& core, Eigen::Index i, OutputQuantity q) {
@@ -237,7 +238,7 @@ bool reading_plausible(const StateSpace& core, Eigen::Index i, OutputQuantity q)
   switch (degree) {
     case 0: return q == OutputQuantity::acceleration;
     case 1: return q == OutputQuantity::velocity;
-    case 2: return q == OutputQuantity::position || q == OutputQuantity::velocity;
+    case 2: return q == OutputQuantity::position;
     default: return true;
   }
 }
@@ -729,6 +730,14 @@ DiagnoseReport DiagnoseSession::finish(
     report.findings.push_back(f);
     previous = next;
     previous_fit = next_fit;
+  }
+  if (report.findings.empty() && report.location.any_mismatch) {
+    std::string fired;
+    for (const auto& f : report.location.fired) fired += (fired.empty() ? "" : ", ") + f;
+    report.warnings.push_back("diagnose: the recording disagrees with the simulation (mismatch tests fired: " + fired +
+                              "; validation fit " + fixed(report.fit_before, 4) +
+                              " %) but no kind of physics in the library explains it significantly: an empty list of "
+                              "findings here does not mean the simulation is right");
   }
   report.fit_after_per_output = previous_fit;
   report.fit_after = report.fit_after_per_output.mean();
