@@ -17,10 +17,22 @@ namespace {
 
 std::pair<nb::object, ModelFile> run_diagnose(const ModelFile& nominal_file, const SampleArray& u, const SampleArray& y,
                                               double Ts, int max_findings, double significance, bool refit_nominal,
-                                              std::optional<std::pair<SampleArray, SampleArray>> confirm) {
+                                              std::optional<std::pair<SampleArray, SampleArray>> confirm,
+                                              std::optional<std::vector<std::string>> output_quantity) {
   if (!(Ts > 0.0)) throw std::invalid_argument("diagnose: Ts must be > 0");
   AugmentedModel nominal = augmented_model_from_file(nominal_file, "nominal");
   nominal.nominal = model_at_sample_time(nominal_file.model, Ts, Hold::zoh, "nominal");  // as the command line does
+  if (output_quantity) {
+    // One name for every output or one per output, as --output-quantity.
+    const auto& names = *output_quantity;
+    const Eigen::Index l = nominal.nominal.outputs();
+    if (names.size() != 1 && static_cast<Eigen::Index>(names.size()) != l)
+      throw std::invalid_argument("diagnose: output_quantity needs one name for every output or one per output (" +
+                                  std::to_string(l) + " outputs, " + std::to_string(names.size()) + " given)");
+    nominal.output_quantities.clear();
+    for (Eigen::Index i = 0; i < l; ++i)
+      nominal.output_quantities.push_back(parse_output_quantity(names[names.size() == 1 ? 0 : static_cast<std::size_t>(i)]));
+  }
   DiagnoseOptions o;
   o.max_findings = max_findings;
   o.significance = significance;
@@ -112,10 +124,13 @@ void bind_diagnose(nb::module_& m) {
   m.def("diagnose", &run_diagnose, nb::arg("nominal"), nb::arg("u"), nb::arg("y"), nb::arg("Ts"), nb::kw_only(),
         nb::arg("max_findings") = defaults.max_findings, nb::arg("significance") = defaults.significance,
         nb::arg("refit_nominal") = defaults.refit_nominal, nb::arg("confirm") = nb::none(),
+        nb::arg("output_quantity") = nb::none(),
         "Compare a simulation model (nominal: a Model, continuous models are sampled with a zero-order hold)\n"
         "with a recording (u, y, Ts): where they disagree, the physics the nominal left out, each finding fitted\n"
         "and kept only if it improves the fit on held-out data. confirm=(u2, y2): fit on the whole record and\n"
-        "confirm every finding on that independent recording. Returns (report, augmented): the JSON report of\n"
+        "confirm every finding on that independent recording. output_quantity: what the outputs measure\n"
+        "(['velocity'], one name for all or one per output: position, velocity, acceleration, other), as\n"
+        "--output-quantity; default: the model's own, or inferred. Returns (report, augmented): the JSON report of\n"
         "`sysid diagnose --json` as a dict, and the augmented Model (the nominal when nothing was found).");
 }
 

@@ -93,3 +93,17 @@ def test_diagnose_equals_the_command_line(data_dir, sysid_cli, tmp_path):
     assert report["fit_after"] == cli["fit_after"]
     assert augmented.type == "augmented"
     assert sysid.fit_percent(y, augmented.simulate(u))[0] > sysid.fit_percent(y, nominal.simulate(u))[0]
+    # Every finding states its parameters' standard errors (DESIGN.md "uncertainty").
+    assert set(report["findings"][0]["uncertainty"]) == set(report["findings"][0]["params"])
+
+
+def test_diagnose_reads_a_velocity_output(data_dir):
+    case = data_dir / "concealed" / "drive_velocity_friction"
+    nominal = sysid.read_model(str(case / "nominal.json"))
+    u, y, Ts = sysid.read_log(str(case / "log.csv"), nominal.inputs, nominal.outputs)
+    report, augmented = sysid.diagnose(nominal, u, y, Ts, output_quantity=["velocity"])
+    assert report["output_quantities"] == {"y": "velocity"}
+    assert report["findings"][0]["kind"] == "coulomb_friction"
+    assert abs(report["findings"][0]["params"]["level"] / 0.1 - 1.0) < 0.1
+    with pytest.raises(ValueError):
+        sysid.diagnose(nominal, u, y, Ts, output_quantity=["speed"])

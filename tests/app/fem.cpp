@@ -90,6 +90,8 @@ TEST(FemApp, ReducedModelAgreesWithTheFeModelAndTheMeasurementShowsTheMissingBra
   const json model = read_json(reduced);
   EXPECT_EQ(model["A"].size(), 16u);
   EXPECT_EQ(model["outputs"], json({"v_tip", "v_mid"}));
+  // The FE model knows what its outputs measure (velocities here): diagnose reads them so.
+  EXPECT_EQ(model["output_quantities"], json({"velocity", "velocity"}));
   ASSERT_EQ(model["provenance"]["natural_frequencies_hz"].size(), 8u);
   // The bar's first free-free bending mode: Euler-Bernoulli (4.730)^2/(2 pi L^2) sqrt(EI/rhoA)
   // = 52.3 Hz for the bare bar; the isolators and the 2 g tip mass move it by < 1 %.

@@ -55,6 +55,11 @@ struct DetectionData {
   /// motion; empty: `simulator`'s reading only. Candidates proposed under a
   /// reading carry its quantities (Candidate::output_quantities).
   std::vector<const AugmentedSimulator*> plant_readings;
+  /// The nominal carries the operating point it was identified at (a non-zero
+  /// input_offset: an identified model whose means were removed). A constant
+  /// force is then indistinguishable from a shift of that operating point
+  /// between records, and is not proposed.
+  bool identified_operating_point = false;
   std::vector<PhysicsBlock> accepted;             ///< blocks already in the model
   Eigen::MatrixXd u, y;                           ///< rows x m, rows x l
   Eigen::MatrixXd current;                        ///< rows x l

@@ -412,6 +412,7 @@ std::vector<Candidate> DiagnoseSession::propose() const {
   data.simulator = m_fine.get();
   for (const auto& [reading, simulator] : m_readings) data.plant_readings.push_back(simulator.get());
   data.accepted = fixed;
+  data.identified_operating_point = m_nominal.input_offset.size() > 0 && m_nominal.input_offset.cwiseAbs().maxCoeff() > 0.0;
   data.u = m_log.u.topRows(fit_rows);
   data.y = m_log.y.topRows(fit_rows);
   data.current = simulator_for({}, fixed).simulate(fixed, m_log.u, fit_rows);

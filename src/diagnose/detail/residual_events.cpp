@@ -77,4 +77,16 @@ std::string describe(const ResidualEvents& e, double Ts) {
          " zero crossings of the command";
 }
 
+std::string where_it_lives(const Eigen::VectorXd& residual, const Eigen::VectorXd& velocity, const Eigen::VectorXd& command,
+                           double Ts, bool at_reversals) {
+  const ResidualEvents e = residual_events(residual, velocity, command);
+  if (!e.tested) return describe(e, Ts);
+  const char* reversals = "the velocity reversals, where friction";
+  const char* crossings = "the zero crossings of the command, where a dead zone";
+  const bool own = at_reversals ? e.near_reversals >= e.near_crossings : e.near_crossings >= e.near_reversals;
+  return describe(e, Ts) + (own ? ": it lives at " + std::string(at_reversals ? reversals : crossings) + " acts"
+                                : ": it lives nearer " + std::string(at_reversals ? crossings : reversals) +
+                                      " would act, yet this kind fitted better");
+}
+
 }  // namespace sysid

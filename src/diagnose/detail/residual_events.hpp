@@ -28,4 +28,11 @@ ResidualEvents residual_events(const Eigen::VectorXd& residual, const Eigen::Vec
 /// velocity reversals, 1.2 times near the 40 zero crossings of the command".
 std::string describe(const ResidualEvents& e, double Ts);
 
+/// The evidence of a kind whose residual lives at the velocity reversals
+/// (`at_reversals`: friction) or at the command's zero crossings (a dead zone):
+/// describe(), then whether the residual lives where the kind acts or nearer
+/// where the other would act.
+std::string where_it_lives(const Eigen::VectorXd& residual, const Eigen::VectorXd& velocity, const Eigen::VectorXd& command,
+                           double Ts, bool at_reversals);
+
 }  // namespace sysid

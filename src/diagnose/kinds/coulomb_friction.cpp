@@ -104,11 +104,7 @@ class CoulombFriction final : public PhysicsKind {
   /// Friction and a dead zone both flatten the response; the residual they
   /// explain sits at different instants (residual_events.hpp).
   std::string where_evidence(const PhysicsBlock&, const FindingSignals& s) const override {
-    const ResidualEvents e = residual_events(s.residual_before, s.velocity, s.command);
-    if (!e.tested) return describe(e, s.Ts);
-    const bool own = e.near_reversals >= e.near_crossings;
-    return describe(e, s.Ts) + (own ? ": it lives at the velocity reversals, where friction acts"
-                                    : ": it lives nearer the zero crossings of the command, where a dead zone would act, yet this kind fitted better");
+    return where_it_lives(s.residual_before, s.velocity, s.command, s.Ts, /*at_reversals=*/true);
   }
   std::string summary(const PhysicsBlock& b, const SummaryContext& s) const override {
     const double level = b.param("level"), r = b.param("asymmetry");

@@ -33,11 +33,7 @@ class Deadzone final : public PhysicsKind {
   /// Friction and a dead zone both flatten the response; the residual they
   /// explain sits at different instants (residual_events.hpp).
   std::string where_evidence(const PhysicsBlock&, const FindingSignals& s) const override {
-    const ResidualEvents e = residual_events(s.residual_before, s.velocity, s.command);
-    if (!e.tested) return describe(e, s.Ts);
-    const bool own = e.near_crossings >= e.near_reversals;
-    return describe(e, s.Ts) + (own ? ": it lives at the zero crossings of the command, where a dead zone acts"
-                                    : ": it lives nearer the velocity reversals, where friction would act, yet this kind fitted better");
+    return where_it_lives(s.residual_before, s.velocity, s.command, s.Ts, /*at_reversals=*/false);
   }
   std::string summary(const PhysicsBlock& b, const SummaryContext& s) const override {
     return "The actuation of " + s.input + " has a dead zone of total width " + fixed(b.param("width"), 3) + " (input units).";
