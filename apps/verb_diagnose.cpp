@@ -137,17 +137,6 @@ void plot_diagnose(const DiagnoseArgs& a, const LoadedLog& log, const DiagnoseRe
   write_plot(fig, a.plot, "diagnose");
 }
 
-/// --output-quantity: one name for every output, or one per output.
-std::vector<OutputQuantity> parse_quantities(const std::vector<std::string>& names, Eigen::Index outputs) {
-  if (names.size() != 1 && static_cast<Eigen::Index>(names.size()) != outputs)
-    throw CLI::ValidationError("--output-quantity", "give one quantity for every output or one per output (" +
-                                                        std::to_string(outputs) + " outputs, " + std::to_string(names.size()) +
-                                                        " given)");
-  std::vector<OutputQuantity> out;
-  for (Eigen::Index i = 0; i < outputs; ++i) out.push_back(parse_output_quantity(names[names.size() == 1 ? 0 : static_cast<std::size_t>(i)]));
-  return out;
-}
-
 void run_diagnose(const DiagnoseArgs& a) {
   const std::string verb = "diagnose";
   std::vector<std::string> sources{a.model_path, a.log_path};
@@ -160,7 +149,13 @@ void run_diagnose(const DiagnoseArgs& a) {
   AugmentedModel nominal = augmented_model_from_file(file, a.model_path);
   nominal.nominal = model_for_sample_time(file, log.data.Ts, a.model_path, verb);
   const Experiment& e = log.data.experiments.front();
-  if (!a.output_quantities.empty()) nominal.output_quantities = parse_quantities(a.output_quantities, e.y.cols());
+  if (!a.output_quantities.empty()) {
+    try {
+      nominal.output_quantities = parse_output_quantities(a.output_quantities, e.y.cols());
+    } catch (const std::invalid_argument& ex) {
+      throw CLI::ValidationError("--output-quantity", ex.what());
+    }
+  }
 
   DiagnoseOptions o;
   o.max_findings = a.max_findings;

@@ -22,17 +22,8 @@ std::pair<nb::object, ModelFile> run_diagnose(const ModelFile& nominal_file, con
   if (!(Ts > 0.0)) throw std::invalid_argument("diagnose: Ts must be > 0");
   AugmentedModel nominal = augmented_model_from_file(nominal_file, "nominal");
   nominal.nominal = model_at_sample_time(nominal_file.model, Ts, Hold::zoh, "nominal");  // as the command line does
-  if (output_quantity) {
-    // One name for every output or one per output, as --output-quantity.
-    const auto& names = *output_quantity;
-    const Eigen::Index l = nominal.nominal.outputs();
-    if (names.size() != 1 && static_cast<Eigen::Index>(names.size()) != l)
-      throw std::invalid_argument("diagnose: output_quantity needs one name for every output or one per output (" +
-                                  std::to_string(l) + " outputs, " + std::to_string(names.size()) + " given)");
-    nominal.output_quantities.clear();
-    for (Eigen::Index i = 0; i < l; ++i)
-      nominal.output_quantities.push_back(parse_output_quantity(names[names.size() == 1 ? 0 : static_cast<std::size_t>(i)]));
-  }
+  // One name for every output or one per output, as --output-quantity.
+  if (output_quantity) nominal.output_quantities = parse_output_quantities(*output_quantity, nominal.nominal.outputs());
   DiagnoseOptions o;
   o.max_findings = max_findings;
   o.significance = significance;

@@ -32,6 +32,15 @@ OutputQuantity parse_output_quantity(const std::string& name) {
   throw std::invalid_argument("unknown output quantity '" + name + "' (expected position, velocity, acceleration or other)");
 }
 
+std::vector<OutputQuantity> parse_output_quantities(const std::vector<std::string>& names, Eigen::Index outputs) {
+  if (names.size() != 1 && static_cast<Eigen::Index>(names.size()) != outputs)
+    throw std::invalid_argument("give one output quantity for every output or one per output (" + std::to_string(outputs) +
+                                " outputs, " + std::to_string(names.size()) + " given)");
+  std::vector<OutputQuantity> out;
+  for (Eigen::Index i = 0; i < outputs; ++i) out.push_back(parse_output_quantity(names[names.size() == 1 ? 0 : static_cast<std::size_t>(i)]));
+  return out;
+}
+
 namespace {
 
 /// A parallel mode in modal form, exactly discretised at step h: q'' + 2 zeta w q' + w^2 q = f.

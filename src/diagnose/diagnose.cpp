@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "diagnose/detail/detection_context.hpp"
+#include "sysid/core/format_number.hpp"
 #include "diagnose/detail/diagnose_session.hpp"
 #include "sysid/core/distributions.hpp"
 #include "sysid/diagnose/physics_kind.hpp"
@@ -49,7 +50,7 @@ DiagnoseReport diagnose(const AugmentedModel& nominal, const Eigen::Ref<const Ei
   const Eigen::Index V = seg.total - seg.estimation;
   const Recording& log = session.log();
   std::ostringstream v;
-  v << "last " << fixed(100.0 * static_cast<double>(V) / static_cast<double>(seg.total), 3) << " % of samples (" << V << " of "
+  v << "last " << format_number(100.0 * static_cast<double>(V) / static_cast<double>(seg.total), 3) << " % of samples (" << V << " of "
     << seg.total << ")";
   return session.finish([&](const std::vector<Candidate>&, const Eigen::MatrixXd& on_log) -> Eigen::VectorXd {
     return fit_percent(log.y.bottomRows(V), on_log.bottomRows(V));

@@ -29,13 +29,16 @@ std::vector<Candidate> propose_candidates(const DetectionData& data, const Detec
       case BlockStage::sensor:
         for (long i = 0; i < l; ++i) kind->propose(c, 0, i, out);
         break;
+      // A constant input (zero or not) carries no evidence about the actuator or
+      // the plant's own forces: every such effect would be a constant too.
       case BlockStage::actuator:
-        for (long j = 0; j < m; ++j) kind->propose(c, j, j < l ? j : 0, out);
+        for (long j = 0; j < m; ++j)
+          if (varies(c, j)) kind->propose(c, j, j < l ? j : 0, out);
         break;
       case BlockStage::plant_feedback:
         for (long j = 0; j < m; ++j)
           for (long i = 0; i < l; ++i) {
-            if (!(l == 1 || i == j)) continue;
+            if (!(l == 1 || i == j) || !varies(c, j)) continue;
             if (!kind->reads_motion() || readings.empty()) {
               kind->propose(c, j, i, out);
               continue;

@@ -55,6 +55,11 @@ const char* quantity_name(OutputQuantity q);
 /// The quantity named `name` (the four DESIGN.md names); std::invalid_argument otherwise.
 OutputQuantity parse_output_quantity(const std::string& name);
 
+/// One quantity per output from one name for every output or one name per output
+/// (`--output-quantity`, Python's output_quantity); std::invalid_argument for a
+/// wrong count or an unknown name.
+std::vector<OutputQuantity> parse_output_quantities(const std::vector<std::string>& names, Eigen::Index outputs);
+
 struct AugmentedModel {
   StateSpace nominal;             ///< discrete (Ts > 0)
   Eigen::VectorXd x0;             ///< nominal initial state; empty = zero

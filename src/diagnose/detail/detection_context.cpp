@@ -1,10 +1,11 @@
 // The detectors' shared view of the residual; see detection_context.hpp.
 #include "diagnose/detail/detection_context.hpp"
 
+#include "sysid/core/format_number.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 
 namespace sysid {
 
@@ -160,18 +161,6 @@ bool varies(const DetectionContext& c, long input) {
   return rms(u) > 0 && u.maxCoeff() > u.minCoeff();
 }
 
-std::string percent(double fraction) {
-  std::ostringstream s;
-  s.precision(3);
-  s << 100.0 * fraction << " %";
-  return s.str();
-}
-
-std::string fixed(double value, int digits) {
-  std::ostringstream s;
-  s.precision(digits);
-  s << value;
-  return s.str();
-}
+std::string percent(double fraction) { return format_number(100.0 * fraction, 3) + " %"; }
 
 }  // namespace sysid

@@ -99,16 +99,12 @@ PhysicsBlock make_block(const std::string& kind, long input, long output);
 /// Root mean square of x (0 for an empty x).
 double rms(const Eigen::VectorXd& x);
 
-/// Input j varies over the detection rows: a constant input (zero or not)
-/// carries no evidence about the actuator or the plant's response to it (every
-/// effect would be a constant too).
+/// Input j varies over the detection rows (propose_candidates proposes no
+/// actuator effect or plant force on a constant input).
 bool varies(const DetectionContext& c, long input);
 
 /// "12.3 %" for a fraction 0.123.
 std::string percent(double fraction);
-
-/// `value` with `digits` significant digits, for a finding's sentence.
-std::string fixed(double value, int digits);
 
 /// The smallest positive normal double (a floor for scales and bounds).
 inline constexpr double kTinyScale = std::numeric_limits<double>::min();

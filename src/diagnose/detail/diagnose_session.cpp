@@ -11,9 +11,8 @@
 #include <stdexcept>
 
 #include "diagnose/detail/detection_context.hpp"
+#include "sysid/core/format_number.hpp"
 #include "diagnose/detail/residual_events.hpp"
-#include "sysid/core/discretize.hpp"
-#include "sysid/core/errors.hpp"
 #include "sysid/core/identification_warnings.hpp"
 #include "sysid/core/parallel_for.hpp"
 #include "sysid/core/poles_zeros.hpp"
@@ -208,59 +207,51 @@ std::vector<std::pair<double, double>> explained_windows(const MismatchLocation&
   return out;
 }
 
-/// Whether output i can be read as `q` given the nominal's high-frequency
-/// behaviour on its collocated path (input i, or the only input): a force moves
-/// a mass's acceleration at once (a direct feedthrough: relative degree 0), its
-/// velocity one integration later (relative degree 1) and its position two. At
-/// the Nyquist frequency w the continuous equivalent's path is about D + CB/(jw)
-/// + CAB/(jw)^2. The degree counts only when one term dominates the others
-/// 20-fold: then degree 0 allows only an acceleration, 1 only a velocity, 2 only
-/// a position (the plant's forces are collocated with their output: a velocity
-/// behind a spring is not a collocated reading).
-/// Otherwise — an identified model, whose feedthrough and first Markov parameter
-/// carry noise — and without a continuous equivalent, every reading is plausible.
-bool reading_plausible(const StateSpace& core, Eigen::Index i, OutputQuantity q) {
-  std::optional<StateSpace> c;
-  try {
-    c = d2c_zoh(core);
-  } catch (const NumericalError&) {
-    return true;
-  }
-  const Eigen::Index j = i < core.inputs() ? i : 0;
-  const double w = std::numbers::pi / core.Ts;
-  const double h0 = std::abs(c->D(i, j)), h1 = std::abs(c->C.row(i).dot(c->B.col(j))) / w,
-               h2 = std::abs(c->C.row(i).dot(c->A * c->B.col(j))) / (w * w);
+/// The relative degree of output i's collocated path (input i, or the only
+/// input) as the nominal's continuous equivalent shows it at the Nyquist
+/// frequency w = pi / Ts, or -1 when it does not say: a force moves a mass's acceleration
+/// at once (a direct feedthrough: degree 0), its velocity one integration later
+/// (degree 1) and its position two. At w the path is about D + CB/(jw) +
+/// CAB/(jw)^2; the degree counts only when one term dominates the others 20-fold.
+/// An identified model, whose feedthrough and first Markov parameter carry noise,
+/// usually does not say.
+int relative_degree(const StateSpace& continuous, Eigen::Index i, double Ts) {
+  const StateSpace& c = continuous;
+  const Eigen::Index j = i < c.inputs() ? i : 0;
+  const double w = std::numbers::pi / Ts;
+  const double h0 = std::abs(c.D(i, j)), h1 = std::abs(c.C.row(i).dot(c.B.col(j))) / w,
+               h2 = std::abs(c.C.row(i).dot(c.A * c.B.col(j))) / (w * w);
   constexpr double dominates = 20.0;
-  int degree = -1;
-  if (h0 > dominates * std::max(h1, h2)) degree = 0;
-  else if (h1 > dominates * std::max(h0, h2)) degree = 1;
-  else if (h2 > dominates * std::max(h0, h1)) degree = 2;
-  switch (degree) {
-    case 0: return q == OutputQuantity::acceleration;
-    case 1: return q == OutputQuantity::velocity;
-    case 2: return q == OutputQuantity::position;
-    default: return true;
-  }
+  if (h0 > dominates * std::max(h1, h2)) return 0;
+  if (h1 > dominates * std::max(h0, h2)) return 1;
+  if (h2 > dominates * std::max(h0, h1)) return 2;
+  return -1;
 }
 
 /// The readings of the outputs to try for the plant's forces when some output's
 /// quantity is unknown: each unknown one read as a position, as a velocity or as
-/// an acceleration — those the nominal's relative degree allows for every
-/// unknown output (reading_plausible; all three when none fits them all, e.g. an
-/// identified model whose small feedthrough is noise). Empty when every quantity
-/// is known.
-std::vector<std::vector<OutputQuantity>> readings_to_try(const std::vector<OutputQuantity>& quantities, const StateSpace& core) {
+/// an acceleration — those the relative degree of every unknown output allows
+/// (degree 0: an acceleration, 1: a velocity, 2: a position — the plant's forces
+/// are collocated with their output, and a velocity behind a spring is not a
+/// collocated reading; any reading when the degree is not decisive or there is no
+/// continuous equivalent; all three when no reading fits every output). Empty
+/// when every quantity is known.
+std::vector<std::vector<OutputQuantity>> readings_to_try(const std::vector<OutputQuantity>& quantities,
+                                                         const std::optional<StateSpace>& continuous, double Ts) {
   std::vector<std::vector<OutputQuantity>> out;
   if (std::none_of(quantities.begin(), quantities.end(), [](OutputQuantity q) { return q == OutputQuantity::unknown; }))
     return out;
   const std::vector<OutputQuantity> all = {OutputQuantity::position, OutputQuantity::velocity, OutputQuantity::acceleration};
-  std::vector<OutputQuantity> tried;
-  for (OutputQuantity reading : all) {
-    bool plausible = true;
-    for (std::size_t i = 0; i < quantities.size(); ++i)
-      if (quantities[i] == OutputQuantity::unknown) plausible = plausible && reading_plausible(core, static_cast<Eigen::Index>(i), reading);
-    if (plausible) tried.push_back(reading);
+  std::vector<bool> plausible(all.size(), true);
+  for (std::size_t i = 0; i < quantities.size(); ++i) {
+    if (quantities[i] != OutputQuantity::unknown || !continuous) continue;
+    const int degree = relative_degree(*continuous, static_cast<Eigen::Index>(i), Ts);
+    if (degree < 0) continue;
+    for (std::size_t r = 0; r < all.size(); ++r) plausible[r] = plausible[r] && static_cast<int>(r) == 2 - degree;
   }
+  std::vector<OutputQuantity> tried;
+  for (std::size_t r = 0; r < all.size(); ++r)
+    if (plausible[r]) tried.push_back(all[r]);
   if (tried.empty()) tried = all;
   for (OutputQuantity reading : tried) {
     std::vector<OutputQuantity> r = quantities;
@@ -269,16 +260,6 @@ std::vector<std::vector<OutputQuantity>> readings_to_try(const std::vector<Outpu
     out.push_back(r);
   }
   return out;
-}
-
-/// "position, velocity": the readings readings_to_try gives, in words.
-std::string readings_words(const std::vector<OutputQuantity>& quantities, const StateSpace& core) {
-  std::string words;
-  for (const auto& r : readings_to_try(quantities, core)) {
-    const auto unknown = std::find(quantities.begin(), quantities.end(), OutputQuantity::unknown) - quantities.begin();
-    words += (words.empty() ? "" : ", ") + std::string(quantity_name(r[static_cast<std::size_t>(unknown)]));
-  }
-  return words;
 }
 
 /// Why the outputs were read as `chosen`: the accepted force's selection gain
@@ -296,7 +277,7 @@ std::string reading_note(const std::vector<OutputQuantity>& before, const std::v
   const JudgedCandidate& won = judged[static_cast<std::size_t>(best)];
   s << " was not given (--output-quantity); forces inside the plant were tried under each reading the nominal's "
        "relative degree allows, and "
-    << won.candidate.block.kind << " under this one gained " << fixed(won.selection_gain, 3)
+    << won.candidate.block.kind << " under this one gained " << format_number(won.selection_gain, 3)
     << " points on the selection segment";
   std::map<std::vector<OutputQuantity>, const JudgedCandidate*> best_other;
   for (const auto& j : judged) {
@@ -310,7 +291,7 @@ std::string reading_note(const std::vector<OutputQuantity>& before, const std::v
     for (std::size_t i = 0; i < before.size(); ++i)
       if (before[i] == OutputQuantity::unknown) name = quantity_name(reading[i]);
     s << "; the best under the " << name << " reading (" << j->candidate.block.kind << ") "
-      << fixed(j->selection_gain, 3);
+      << format_number(j->selection_gain, 3);
   }
   if (best_other.empty()) s << " (the only reading it allows)";
   return s.str();
@@ -348,11 +329,20 @@ DiagnoseSession::DiagnoseSession(const AugmentedModel& nominal, const Eigen::Ref
   m_y_nominal = m_fine->simulate(m_base, m_log.u);
 }
 
+std::string DiagnoseSession::readings_words() const {
+  std::string words;
+  const auto unknown =
+      static_cast<std::size_t>(std::find(m_quantities.begin(), m_quantities.end(), OutputQuantity::unknown) - m_quantities.begin());
+  for (const auto& [reading, simulator] : m_readings)
+    words += (words.empty() ? "" : ", ") + std::string(quantity_name(reading[unknown]));
+  return words;
+}
+
 void DiagnoseSession::build_simulators() {
   m_fast = std::make_unique<AugmentedSimulator>(m_core, 1, m_core_x0, m_quantities);
   m_fine = std::make_unique<AugmentedSimulator>(m_core, m_substeps, m_core_x0, m_quantities);
   m_readings.clear();
-  for (auto& r : readings_to_try(m_quantities, m_core))
+  for (auto& r : readings_to_try(m_quantities, m_fine->continuous_equivalent(), m_core.Ts))
     m_readings[r] = std::make_unique<AugmentedSimulator>(m_core, m_substeps, m_core_x0, r);
 }
 
@@ -592,19 +582,19 @@ void DiagnoseSession::hold_unneeded_optional_terms(Eigen::Index rows) {
     if (free_terms.empty()) continue;
     std::vector<Candidate> reduced = m_accepted;
     hold_at_null(reduced[k], free_terms);
-    const CandidateFitResult full = fit_candidates(simulator_for(m_accepted, m_base), m_base, m_accepted, u, y, rows, m_local_fit);
+    // The accepted findings are fitted on these rows already (refitted there, or
+    // the very models the recording confirmed): only the reduced set is fitted.
+    const double full = simulation_cost(simulator_for(m_accepted, m_base), combine_blocks(m_base, m_accepted), u, y, rows);
     const CandidateFitResult without = fit_candidates(simulator_for(reduced, m_base), m_base, reduced, u, y, rows, m_local_fit);
     // A term accepted with its kind in an early round may be what a later
     // finding explains better (a one-sided friction standing in for a constant
     // force): the simpler model is kept when it fits the same rows as well, to
     // within a few times what one parameter fitting noise gains (1 / rows).
-    if (without.cost <= full.cost * (1.0 + 5.0 / static_cast<double>(rows))) {
+    if (without.cost <= full * (1.0 + 5.0 / static_cast<double>(rows))) {
       m_accepted = without.fitted;
       m_report.warnings.push_back("diagnose: " + m_accepted[k].block.kind + ": " + std::string(free_terms.front().name) +
-                                  " held at " + fixed(free_terms.front().null_value, 3) +
+                                  " held at " + format_number(free_terms.front().null_value, 3) +
                                   ": with the later findings it no longer improves the fit");
-    } else {
-      m_accepted = full.fitted;
     }
   }
 }
@@ -616,9 +606,9 @@ std::string DiagnoseSession::best_alternative(const JudgedCandidate& accepted) c
         (!best || j.selection_gain > best->selection_gain))
       best = &j;
   if (!best) return "no other kind was fitted in its round";
-  return "in its round (" + std::to_string(accepted.round) + ") it gained " + fixed(accepted.selection_gain, 3) +
+  return "in its round (" + std::to_string(accepted.round) + ") it gained " + format_number(accepted.selection_gain, 3) +
          " points on the selection data; the best other kind, " + best->candidate.block.kind + ", " +
-         fixed(best->selection_gain, 3) + (best->significant ? "" : " (not accepted: " + std::string(
+         format_number(best->selection_gain, 3) + (best->significant ? "" : " (not accepted: " + std::string(
                                                                         !best->parameters_significant ? "its parameters are not significant"
                                                                         : best->t_statistic <= best->t_threshold ? "not significant"
                                                                                                                  : "a smaller gain") + ")");
@@ -676,7 +666,7 @@ std::vector<CandidateUncertainty> DiagnoseSession::final_uncertainty() {
       if (defining_parameter_differs(m_accepted[k], out[k].standard_errors, kParameterZ, &why)) continue;
       m_report.warnings.push_back("diagnose: " + m_accepted[k].block.kind + " was accepted in round " +
                                   std::to_string(m_acceptance[k].round) + " but is not reported: fitted with the other findings, " +
-                                  why + " (needs more than " + fixed(kParameterZ, 2) + ")");
+                                  why + " (needs more than " + format_number(kParameterZ, 2) + ")");
       m_accepted.erase(m_accepted.begin() + static_cast<std::ptrdiff_t>(k));
       m_acceptance.erase(m_acceptance.begin() + static_cast<std::ptrdiff_t>(k));
       dropped = true;
@@ -736,7 +726,7 @@ DiagnoseReport DiagnoseSession::finish(
     std::string fired;
     for (const auto& f : report.location.fired) fired += (fired.empty() ? "" : ", ") + f;
     report.warnings.push_back("diagnose: the recording disagrees with the simulation (mismatch tests fired: " + fired +
-                              "; validation fit " + fixed(report.fit_before, 4) +
+                              "; validation fit " + format_number(report.fit_before, 4) +
                               " %) but no kind of physics in the library explains it significantly: an empty list of "
                               "findings here does not mean the simulation is right");
   }
@@ -756,7 +746,7 @@ DiagnoseReport DiagnoseSession::finish(
   if (report.reading_note.empty() &&
       std::any_of(m_quantities.begin(), m_quantities.end(), [](OutputQuantity q) { return q == OutputQuantity::unknown; }))
     report.reading_note = "the quantity of some outputs was not given (--output-quantity): forces inside the plant were tried "
-                          "under each reading the nominal's relative degree allows (" + readings_words(m_quantities, m_core) +
+                          "under each reading the nominal's relative degree allows (" + readings_words() +
                           ") and none was accepted, so the quantities stay unknown";
   report.augmented.substeps = simulator_for(m_accepted, m_base).substeps();
   if (report.nominal_refit.applied) {

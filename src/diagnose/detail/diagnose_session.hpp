@@ -103,6 +103,8 @@ class DiagnoseSession {
 
  private:
   void build_simulators();
+  /// "position, velocity": the readings tried (m_readings), in words.
+  std::string readings_words() const;
   LinearCoreRefitResult refit_core(const std::vector<Candidate>& blocks, Eigen::Index rows, int steps,
                                    const std::vector<OutputQuantity>& reading) const;
   Eigen::MatrixXd simulate_refit(const LinearCoreRefitResult& r, int steps, Eigen::Index rows,

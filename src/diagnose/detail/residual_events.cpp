@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "diagnose/detail/detection_context.hpp"
+#include "sysid/core/format_number.hpp"
 
 namespace sysid {
 
@@ -71,9 +72,9 @@ std::string describe(const ResidualEvents& e, double Ts) {
   if (!e.tested)
     return "where the residual lives was not measured (" + std::to_string(e.reversals) + " velocity reversals, " +
            std::to_string(e.crossings) + " zero crossings of the command)";
-  return "the residual before it is " + fixed(e.near_reversals, 3) + " times its mean square within " +
-         fixed(1e3 * static_cast<double>(e.halfwidth) * Ts, 3) + " ms of the " + std::to_string(e.reversals) +
-         " velocity reversals and " + fixed(e.near_crossings, 3) + " times near the " + std::to_string(e.crossings) +
+  return "the residual before it is " + format_number(e.near_reversals, 3) + " times its mean square within " +
+         format_number(1e3 * static_cast<double>(e.halfwidth) * Ts, 3) + " ms of the " + std::to_string(e.reversals) +
+         " velocity reversals and " + format_number(e.near_crossings, 3) + " times near the " + std::to_string(e.crossings) +
          " zero crossings of the command";
 }
 

@@ -1,5 +1,6 @@
 // backlash: play in the actuation (a play operator on the command).
 #include "diagnose/detail/detection_context.hpp"
+#include "sysid/core/format_number.hpp"
 
 #include <algorithm>
 
@@ -29,13 +30,12 @@ class Backlash final : public PhysicsKind {
     }
   }
   void propose(const DetectionContext& c, long j, long i, std::vector<Candidate>& out) const override {
-    if (!varies(c, j)) return;
     const Eigen::VectorXd uj = c.data().u.col(j);
     out.push_back(c.linearised(make_block("backlash", j, i), "width", 0.0, 0.01 * rms(uj), {"width", 0.0, uj.cwiseAbs().maxCoeff()},
                                1, "play at input reversals"));
   }
   std::string summary(const PhysicsBlock& b, const SummaryContext& s) const override {
-    return "The actuation of " + s.input + " has play (backlash) of total width " + fixed(b.param("width"), 3) +
+    return "The actuation of " + s.input + " has play (backlash) of total width " + format_number(b.param("width"), 3) +
            " (input units).";
   }
 };

@@ -3,6 +3,7 @@
 // length. Not a sensor offset (offset_drift): the plant responds to it through
 // its dynamics, and friction or a spring holds against it.
 #include "diagnose/detail/detection_context.hpp"
+#include "sysid/core/format_number.hpp"
 
 #include <algorithm>
 
@@ -30,13 +31,13 @@ class ConstantForce final : public PhysicsKind {
   /// records (a 0.06 % shift of an ARX nominal's input mean was "found" as a
   /// force on a record with 1e-4 noise).
   void propose(const DetectionContext& c, long j, long i, std::vector<Candidate>& out) const override {
-    if (!varies(c, j) || c.data().identified_operating_point) return;
+    if (c.data().identified_operating_point) return;
     const double u_max = c.data().u.col(j).cwiseAbs().maxCoeff();
     out.push_back(c.linearised(make_block("constant_force", j, i), "force", 0.0, 0.01 * u_max, {"force", -u_max, u_max},
                                c.simulator().substeps(), "a constant force on the plant"));
   }
   std::string summary(const PhysicsBlock& b, const SummaryContext& s) const override {
-    return "A constant force of " + fixed(b.param("force"), 3) + " (input units, positive along " + s.input +
+    return "A constant force of " + format_number(b.param("force"), 3) + " (input units, positive along " + s.input +
            ") acts inside the plant at " + s.output + " (gravity on a vertical axis, a cable's pull).";
   }
 };

@@ -3,6 +3,7 @@
 // guide's preload, a belt's tension). Smooth sign: level tanh(v / velocity_scale),
 // so the simulation stays an ODE with bounded slope.
 #include "diagnose/detail/detection_context.hpp"
+#include "sysid/core/format_number.hpp"
 #include "diagnose/detail/residual_events.hpp"
 #include "sysid/diagnose/parameter_uncertainty.hpp"
 
@@ -57,7 +58,6 @@ class CoulombFriction final : public PhysicsKind {
   /// size in one direction only (both linear in the force at zero friction):
   /// least squares gives the level and the asymmetry's start, and the score.
   void propose(const DetectionContext& c, long j, long i, std::vector<Candidate>& out) const override {
-    if (!varies(c, j)) return;
     const Eigen::VectorXd uj = c.data().u.col(j);
     const double u_rms = rms(uj), u_max = uj.cwiseAbs().maxCoeff(), probe = 0.01 * u_rms;
     PhysicsBlock b = make_block("coulomb_friction", j, i);
@@ -108,9 +108,9 @@ class CoulombFriction final : public PhysicsKind {
   }
   std::string summary(const PhysicsBlock& b, const SummaryContext& s) const override {
     const double level = b.param("level"), r = b.param("asymmetry");
-    const std::string size = r == 0.0 ? fixed(level, 3) + " (input units)"
-                                      : fixed(level * (1.0 + r), 3) + " moving positive and " + fixed(level * (1.0 - r), 3) +
-                                            " moving negative (input units; mean " + fixed(level, 3) + ")";
+    const std::string size = r == 0.0 ? format_number(level, 3) + " (input units)"
+                                      : format_number(level * (1.0 + r), 3) + " moving positive and " + format_number(level * (1.0 - r), 3) +
+                                            " moving negative (input units; mean " + format_number(level, 3) + ")";
     return "A Coulomb friction force of " + size + " opposes the motion at " + s.output + "; it shows near velocity reversals.";
   }
 };

@@ -2,6 +2,7 @@
 // (a coupling the simulation lacks): the nominal's direct path of input j,
 // scaled and added to output i.
 #include "diagnose/detail/detection_context.hpp"
+#include "sysid/core/format_number.hpp"
 #include "sysid/core/simulate.hpp"
 
 namespace sysid {
@@ -30,7 +31,7 @@ class CrossCoupling final : public PhysicsKind {
                                "input " + std::to_string(j + 1) + "'s motion seen at output " + std::to_string(i + 1)));
   }
   std::string summary(const PhysicsBlock& b, const SummaryContext& s) const override {
-    return "Input " + s.input + " moves output " + s.output + " (coupling gain " + fixed(b.param("gain"), 3) +
+    return "Input " + s.input + " moves output " + s.output + " (coupling gain " + format_number(b.param("gain"), 3) +
            ") where the simulation has no coupling.";
   }
 };

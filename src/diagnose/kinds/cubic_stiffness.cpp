@@ -2,6 +2,7 @@
 // linear_coefficient p at the actuator's position p (physics_block.hpp: the
 // linear term takes back the average stiffness a best-linear nominal holds).
 #include "diagnose/detail/detection_context.hpp"
+#include "sysid/core/format_number.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -31,7 +32,6 @@ class CubicStiffness final : public PhysicsKind {
   /// linearly, so least squares gives the start. Scored by what the cubic adds
   /// beyond a linear stiffness change.
   void propose(const DetectionContext& c, long j, long i, std::vector<Candidate>& out) const override {
-    if (!varies(c, j)) return;
     const double u_max = c.data().u.col(j).cwiseAbs().maxCoeff();
     const double p_peak = std::max(c.position(i).cwiseAbs().maxCoeff(), kTinyScale);
     const double reach = u_max / (p_peak * p_peak * p_peak), linear_reach = u_max / p_peak;
@@ -51,7 +51,7 @@ class CubicStiffness final : public PhysicsKind {
   }
   std::string summary(const PhysicsBlock& b, const SummaryContext& s) const override {
     return std::string(b.param("coefficient") >= 0 ? "A hardening" : "A softening") + " cubic stiffness of " +
-           fixed(b.param("coefficient"), 4) + " (input units per position unit cubed) acts at " + s.output +
+           format_number(b.param("coefficient"), 4) + " (input units per position unit cubed) acts at " + s.output +
            "; it shows at the largest amplitudes.";
   }
 };

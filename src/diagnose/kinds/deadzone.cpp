@@ -1,6 +1,7 @@
 // deadzone: no actuation while the command is within +-width/2 of zero, the
 // command less width/2 beyond.
 #include "diagnose/detail/detection_context.hpp"
+#include "sysid/core/format_number.hpp"
 #include "diagnose/detail/residual_events.hpp"
 
 namespace sysid {
@@ -25,7 +26,6 @@ class Deadzone final : public PhysicsKind {
     }
   }
   void propose(const DetectionContext& c, long j, long i, std::vector<Candidate>& out) const override {
-    if (!varies(c, j)) return;
     const Eigen::VectorXd uj = c.data().u.col(j);
     out.push_back(c.linearised(make_block("deadzone", j, i), "width", 0.0, 0.01 * rms(uj), {"width", 0.0, uj.cwiseAbs().maxCoeff()},
                                1, "a dead band around zero input"));
@@ -36,7 +36,7 @@ class Deadzone final : public PhysicsKind {
     return where_it_lives(s.residual_before, s.velocity, s.command, s.Ts, /*at_reversals=*/false);
   }
   std::string summary(const PhysicsBlock& b, const SummaryContext& s) const override {
-    return "The actuation of " + s.input + " has a dead zone of total width " + fixed(b.param("width"), 3) + " (input units).";
+    return "The actuation of " + s.input + " has a dead zone of total width " + format_number(b.param("width"), 3) + " (input units).";
   }
 };
 

@@ -1,6 +1,7 @@
 // gain_error: the measured output is a scaled copy of the simulated one (a
 // sensor calibration or an actuator constant off).
 #include "diagnose/detail/detection_context.hpp"
+#include "sysid/core/format_number.hpp"
 
 namespace sysid {
 
@@ -21,7 +22,7 @@ class GainError final : public PhysicsKind {
                                "a scaled copy of the simulated output"));
   }
   std::string summary(const PhysicsBlock& b, const SummaryContext& s) const override {
-    return "The measured " + s.output + " is " + fixed(b.param("ratio"), 4) +
+    return "The measured " + s.output + " is " + format_number(b.param("ratio"), 4) +
            " times the simulated one (a gain or calibration error).";
   }
 };

@@ -3,6 +3,7 @@
 // force = u - h; Ismail, Ikhouane and Rodellar, Arch. Comput. Methods Eng. 16
 // (2009), eq. (6) with n = 1.
 #include "diagnose/detail/detection_context.hpp"
+#include "sysid/core/format_number.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -33,7 +34,6 @@ class Hysteresis final : public PhysicsKind {
   /// Loop width about alpha / (beta + gamma) in input units; grid over the
   /// amplitude alpha and the loop's saturation scale.
   void propose(const DetectionContext& c, long j, long i, std::vector<Candidate>& out) const override {
-    if (!varies(c, j)) return;
     const Eigen::VectorXd uj = c.data().u.col(j);
     const double u_range = uj.maxCoeff() - uj.minCoeff();
     std::vector<PhysicsBlock> grid;
@@ -52,7 +52,7 @@ class Hysteresis final : public PhysicsKind {
     out.push_back(best);
   }
   std::string summary(const PhysicsBlock& b, const SummaryContext& s) const override {
-    return "The actuator of " + s.input + " shows hysteresis (Bouc-Wen alpha " + fixed(b.param("alpha"), 3) + ").";
+    return "The actuator of " + s.input + " shows hysteresis (Bouc-Wen alpha " + format_number(b.param("alpha"), 3) + ").";
   }
 };
 

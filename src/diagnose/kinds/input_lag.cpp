@@ -1,6 +1,7 @@
 // input_lag: a first-order low-pass between the command and the plant force
 // (an amplifier's bandwidth, a valve), part of the linear core.
 #include "diagnose/detail/detection_context.hpp"
+#include "sysid/core/format_number.hpp"
 #include "sysid/core/math_constants.hpp"
 
 #include <algorithm>
@@ -26,7 +27,6 @@ class InputLag final : public PhysicsKind {
   /// A lag of time constant tau acts like -tau du/dt at low frequency; the
   /// sensitivity is taken in tau and the start converted to a corner.
   void propose(const DetectionContext& c, long j, long i, std::vector<Candidate>& out) const override {
-    if (!varies(c, j)) return;
     const double Ts = c.Ts();
     PhysicsBlock b = make_block("input_lag", j, i);
     const double tau_probe = 0.25 * Ts;
@@ -41,7 +41,7 @@ class InputLag final : public PhysicsKind {
   }
   std::string summary(const PhysicsBlock& b, const SummaryContext& s) const override {
     return "The actuation of " + s.input + " lags like a first-order low-pass with a corner at " +
-           fixed(b.param("corner_hz"), 4) + " Hz that the simulation lacks.";
+           format_number(b.param("corner_hz"), 4) + " Hz that the simulation lacks.";
   }
 };
 

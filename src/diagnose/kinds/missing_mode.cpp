@@ -1,6 +1,7 @@
 // missing_mode: a lightly damped mode the simulation lacks, in parallel with
 // the nominal path from the plant force to the output.
 #include "diagnose/detail/detection_context.hpp"
+#include "sysid/core/format_number.hpp"
 #include "sysid/core/math_constants.hpp"
 
 #include <algorithm>
@@ -19,7 +20,11 @@ class MissingMode final : public PhysicsKind {
                                  "a lightly damped mode the simulation lacks", {{"static_gain"}, {"velocity_gain"}}};
     return i;
   }
-  void check(const PhysicsBlock& b, Eigen::Index, Eigen::Index, double Ts) const override { check_mode(b, Ts); }
+  void check(const PhysicsBlock& b, Eigen::Index, Eigen::Index, double Ts) const override {
+    if (!(b.param("freq_hz") > 0.0 && b.param("freq_hz") < 0.5 / Ts))
+      throw std::invalid_argument("missing_mode: need freq_hz in (0, Nyquist)");
+    if (!(b.param("damping") > 0.0)) throw std::invalid_argument("missing_mode: need damping > 0");
+  }
   std::vector<ParallelMode> parallel_modes(const PhysicsBlock& b) const override {
     return {{b.input, b.output, b.param("freq_hz"), b.param("damping"), b.param("static_gain"), b.param("velocity_gain")}};
   }
@@ -55,22 +60,15 @@ class MissingMode final : public PhysicsKind {
                    {"static_gain", -reach, reach},
                    {"velocity_gain", -reach, reach}};
       best.detector_score = std::max(0.0, best.detector_score);
-      best.evidence = "the model-error FRF is significant near " + fixed(f0, 5) + " Hz; a mode there explains " +
+      best.evidence = "the model-error FRF is significant near " + format_number(f0, 5) + " Hz; a mode there explains " +
                       percent(best.detector_score);
       out.push_back(best);
     }
   }
 
   std::string summary(const PhysicsBlock& b, const SummaryContext& s) const override {
-    return "The recordings contain a lightly damped mode at " + fixed(b.param("freq_hz"), 4) + " Hz (damping " +
-           fixed(b.param("damping"), 2) + ") in the path " + s.input + " -> " + s.output + " that the simulation lacks.";
-  }
-
-  /// Shared with mode_shift: a frequency below Nyquist, a positive damping.
-  static void check_mode(const PhysicsBlock& b, double Ts) {
-    if (!(b.param("freq_hz") > 0.0 && b.param("freq_hz") < 0.5 / Ts))
-      throw std::invalid_argument(b.kind + ": need freq_hz in (0, Nyquist)");
-    if (!(b.param("damping") > 0.0)) throw std::invalid_argument(b.kind + ": need damping > 0");
+    return "The recordings contain a lightly damped mode at " + format_number(b.param("freq_hz"), 4) + " Hz (damping " +
+           format_number(b.param("damping"), 2) + ") in the path " + s.input + " -> " + s.output + " that the simulation lacks.";
   }
 };
 

@@ -110,10 +110,10 @@ class ModeShift final : public PhysicsKind {
   std::string summary(const PhysicsBlock& b, const SummaryContext& s) const override {
     // (f / f0)^2 - 1 is the modal stiffness-to-mass ratio error the shift implies.
     const double ratio = b.param("freq_hz") / b.param("nominal_freq_hz");
-    return "The simulation's mode at " + fixed(b.param("nominal_freq_hz"), 4) + " Hz (damping " +
-           fixed(b.param("nominal_damping"), 2) + ") is at " + fixed(b.param("freq_hz"), 4) + " Hz (damping " +
-           fixed(b.param("damping"), 2) + ") in the path " + s.input + " -> " + s.output +
-           ": its modal stiffness-to-mass ratio is " + fixed(100.0 * (ratio * ratio - 1.0), 2) +
+    return "The simulation's mode at " + format_number(b.param("nominal_freq_hz"), 4) + " Hz (damping " +
+           format_number(b.param("nominal_damping"), 2) + ") is at " + format_number(b.param("freq_hz"), 4) + " Hz (damping " +
+           format_number(b.param("damping"), 2) + ") in the path " + s.input + " -> " + s.output +
+           ": its modal stiffness-to-mass ratio is " + format_number(100.0 * (ratio * ratio - 1.0), 2) +
            " % off (a mass or stiffness error of the model).";
   }
 };

@@ -1,5 +1,6 @@
 // offset_drift: a sensor offset and a linear drift, offset + slope t.
 #include "diagnose/detail/detection_context.hpp"
+#include "sysid/core/format_number.hpp"
 
 #include <algorithm>
 
@@ -31,8 +32,8 @@ class OffsetDrift final : public PhysicsKind {
                    "a constant and a ramp explain " + percent(std::max(0.0, explained)) + " of the residual energy"});
   }
   std::string summary(const PhysicsBlock& b, const SummaryContext& s) const override {
-    return "The sensor " + s.output + " has an offset of " + fixed(b.param("offset"), 3) + " and a drift of " +
-           fixed(b.param("slope"), 3) + " per second (output units).";
+    return "The sensor " + s.output + " has an offset of " + format_number(b.param("offset"), 3) + " and a drift of " +
+           format_number(b.param("slope"), 3) + " per second (output units).";
   }
 };
 

@@ -1,6 +1,7 @@
 // periodic_disturbance: a sine in the output that the input does not cause
 // (mains hum, a fan, a pump), amplitude sin(2 pi f t + phase).
 #include "diagnose/detail/detection_context.hpp"
+#include "sysid/core/format_number.hpp"
 #include "sysid/core/math_constants.hpp"
 
 #include <algorithm>
@@ -55,8 +56,8 @@ class PeriodicDisturbance final : public PhysicsKind {
     }
   }
   std::string summary(const PhysicsBlock& b, const SummaryContext& s) const override {
-    return "A periodic disturbance at " + fixed(b.param("freq_hz"), 5) + " Hz with amplitude " +
-           fixed(b.param("amplitude"), 3) + " (output units) is present in " + s.output + " and is not caused by the input.";
+    return "A periodic disturbance at " + format_number(b.param("freq_hz"), 5) + " Hz with amplitude " +
+           format_number(b.param("amplitude"), 3) + " (output units) is present in " + s.output + " and is not caused by the input.";
   }
 };
 

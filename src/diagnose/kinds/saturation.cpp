@@ -1,6 +1,7 @@
 // saturation: an amplifier clipping at +-limit, or the overflow of a first-order
 // store the input fills (a tank, a pneumatic chamber) above a level.
 #include "diagnose/detail/detection_context.hpp"
+#include "sysid/core/format_number.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -98,7 +99,6 @@ class Saturation final : public PhysicsKind {
   }
 
   void propose(const DetectionContext& c, long j, long i, std::vector<Candidate>& out) const override {
-    if (!varies(c, j)) return;
     const Eigen::VectorXd uj = c.data().u.col(j);
     const double u_max = uj.cwiseAbs().maxCoeff();
     // Saturation is not smooth where it vanishes (limit = max |u|): grid of limits.
@@ -120,11 +120,11 @@ class Saturation final : public PhysicsKind {
     if (b.param("storage_pole") > 0.0) {
       // Time constant of the store from its discrete pole: a = exp(-Ts / tau).
       return "The store that " + s.input + " fills (a tank, chamber or reservoir with a time constant of " +
-             fixed(-s.Ts / std::log(b.param("storage_pole")), 3) + " s) overflows above the level a steady " + s.input +
-             " of " + fixed(b.param("limit"), 4) + " (input units, from the operating point) would reach; " +
-             fixed(100.0 * b.param("spill"), 3) + " % of the spill flows on to the next stage.";
+             format_number(-s.Ts / std::log(b.param("storage_pole")), 3) + " s) overflows above the level a steady " + s.input +
+             " of " + format_number(b.param("limit"), 4) + " (input units, from the operating point) would reach; " +
+             format_number(100.0 * b.param("spill"), 3) + " % of the spill flows on to the next stage.";
     }
-    return "The actuation of " + s.input + " saturates at +-" + fixed(b.param("limit"), 4) + " (input units).";
+    return "The actuation of " + s.input + " saturates at +-" + format_number(b.param("limit"), 4) + " (input units).";
   }
 
  private:
@@ -155,8 +155,8 @@ class Saturation final : public PhysicsKind {
     // the saturating store holds a compromise of its dynamics.
     best.free = {{"limit", low + 0.3 * (high - low), high}, {"storage_pole", a * a, std::sqrt(a)}, {"spill", 0.0, 1.0}};
     best.detector_score = std::max(0.0, best.detector_score);
-    best.evidence = "a store filled by the input (pole " + fixed(a, 6) + ") overflowing above " +
-                    fixed(best.block.param("limit"), 6) + " explains " + percent(best.detector_score);
+    best.evidence = "a store filled by the input (pole " + format_number(a, 6) + ") overflowing above " +
+                    format_number(best.block.param("limit"), 6) + " explains " + percent(best.detector_score);
     out.push_back(best);
   }
 };

@@ -1,6 +1,7 @@
 // time_delay: a transport or computation delay between the command and the
 // actuation; fractional delays interpolate linearly between samples.
 #include "diagnose/detail/detection_context.hpp"
+#include "sysid/core/format_number.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -35,12 +36,11 @@ class TimeDelay final : public PhysicsKind {
     for (Eigen::Index k = 0; k < w.size(); ++k) w[k] = (1.0 - frac) * at(k - whole) + frac * at(k - whole - 1);
   }
   void propose(const DetectionContext& c, long j, long i, std::vector<Candidate>& out) const override {
-    if (!varies(c, j)) return;
     out.push_back(c.linearised(make_block("time_delay", j, i), "delay_s", 0.0, c.Ts(),
                                {"delay_s", 0.0, c.options().max_delay_samples * c.Ts()}, 1, "a delayed copy of the input"));
   }
   std::string summary(const PhysicsBlock& b, const SummaryContext& s) const override {
-    return "The response to " + s.input + " arrives " + fixed(b.param("delay_s") * 1e3, 3) +
+    return "The response to " + s.input + " arrives " + format_number(b.param("delay_s") * 1e3, 3) +
            " ms later than the simulation predicts (a transport or computation delay).";
   }
 };
