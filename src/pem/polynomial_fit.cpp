@@ -3,6 +3,8 @@
 #include <sysid/core/identification_warnings.hpp>
 #include <sysid/pem/order_search.hpp>
 #include <sysid/pem/polynomial_fit.hpp>
+#include <sysid/pem/residual_whiteness.hpp>
+#include <sysid/core/format_number.hpp>
 #include <sysid/validate/compare.hpp>
 
 #include <algorithm>
@@ -52,6 +54,41 @@ std::vector<std::string> data_warnings(const IoData& data, PolynomialStructure s
     default: break;  // AR, ARMA: no input, only the output checks apply
   }
   return identification_data_warnings(data, has_inputs(s) ? required : 0, model, to_string(s));
+}
+
+/// Level of the residual whiteness test, over all outputs (Bonferroni): a
+/// warning, so false alarms on records the model describes must be rare.
+constexpr double kWhitenessLevel = 1e-3;
+
+const char* ar_method_words(ArMethod method) {
+  switch (method) {
+    case ArMethod::least_squares: return "least squares";
+    case ArMethod::yule_walker: return "Yule-Walker";
+    case ArMethod::burg: return "Burg's method";
+    case ArMethod::modified_yule_walker: return "modified Yule-Walker";
+  }
+  return "?";
+}
+
+/// The warning of a time-series model whose one-step residual is not white
+/// (pem/residual_whiteness.hpp): what it means, and what to fit instead.
+std::string residual_correlation_warning(PolynomialStructure s, ArMethod method, const PolynomialModel& model,
+                                         const LjungBoxTest& test, const std::string& output) {
+  const std::string na = std::to_string(model.na()), nc = std::to_string(model.nc());
+  const std::string p = test.p_value < 1e-12 ? "p < 1e-12" : "p = " + format_number(test.p_value, 2);
+  std::string w = std::string(to_string(s)) + ": output '" + output + "': the one-step residuals of the " +
+                  (s == PolynomialStructure::ar ? "AR(" + na + ")" : "ARMA(" + na + ", " + nc + ")") +
+                  " are not white (Ljung-Box Q = " + format_number(test.statistic, 4) + " over " + std::to_string(test.lags) +
+                  " lags, " + format_number(test.degrees_of_freedom, 4) + " degrees of freedom, " + p +
+                  "): the model leaves correlation in the record, and its poles are biased. ";
+  if (s == PolynomialStructure::ar)
+    return w + "Measurement noise on the record does this: " + ar_method_words(method) +
+           " then puts resonances too lightly damped and loses weak ones. Fit again with the modified Yule-Walker method "
+           "(method myw), which white measurement noise does not bias, or an ARMA(" + na + ", " + na +
+           ") model, and compare the modes; if the order is too low, raise na.";
+  return w + "An AR(na) process seen through white measurement noise is an ARMA(na, na) process: " +
+         (model.nc() < model.na() ? "fit with nc >= na (" + na + ")" : std::string("raise na and nc")) +
+         ", and compare the modes.";
 }
 
 }  // namespace
@@ -124,6 +161,13 @@ PolynomialFit fit_polynomial(const IoData& data, const PolynomialFitOptions& opt
     fit.loss.push_back(pm.noise_variance * std::max(0.0, n - p) / n);
     for (auto& w : unstable_model_warnings(to_innovation_state_space(pm).model, to_string(s)))
       fit.warnings.push_back(data.outputs() > 1 ? w + " (output " + data.output_name(r) + ")" : w);
+    if (s == PolynomialStructure::ar || s == PolynomialStructure::arma) {
+      const std::optional<LjungBoxTest> test = one_step_residual_whiteness(pm, data, r, fit.output_offset(r));
+      fit.residual_whiteness.push_back(test.value_or(LjungBoxTest{}));
+      const bool tested = !(s == PolynomialStructure::ar && options.ar_method == ArMethod::modified_yule_walker);
+      if (tested && test && test->p_value < kWhitenessLevel / static_cast<double>(l))
+        fit.warnings.push_back(residual_correlation_warning(s, options.ar_method, pm, *test, data.output_name(r)));
+    }
   }
   return fit;
 }

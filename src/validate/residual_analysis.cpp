@@ -1,5 +1,6 @@
 // Implementation of validate/residual_analysis.hpp (method and references in the header).
 #include <sysid/validate/residual_analysis.hpp>
+#include <sysid/core/ljung_box.hpp>
 
 #include <sysid/core/distributions.hpp>
 #include <sysid/core/format_lags.hpp>
@@ -133,12 +134,10 @@ ResidualAnalysisResult analyze_residuals(const Eigen::MatrixXd& e, const Eigen::
   r.ljung_box_dof = static_cast<double>(h - options.noise_parameters);
   r.ljung_box_q.resize(l);
   r.ljung_box_p.resize(l);
-  const double nd = static_cast<double>(N);
   for (Eigen::Index i = 0; i < l; ++i) {
-    double s = 0.0;
-    for (Eigen::Index k = 1; k <= h; ++k) s += acf_e(k, i) * acf_e(k, i) / (nd - static_cast<double>(k));
-    r.ljung_box_q(i) = nd * (nd + 2.0) * s;
-    r.ljung_box_p(i) = chi_square_sf(r.ljung_box_q(i), r.ljung_box_dof);
+    const LjungBoxTest test = ljung_box_test(acf_e.col(i), N, h, options.noise_parameters);
+    r.ljung_box_q(i) = test.statistic;
+    r.ljung_box_p(i) = test.p_value;
   }
 
   // Verdicts.

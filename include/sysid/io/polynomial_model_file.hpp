@@ -73,7 +73,7 @@ inline ModelFile polynomial_model_file(const std::vector<PolynomialModel>& model
 /// writes it, the command line (apps/verb_polynomial.cpp) and the Python package
 /// alike: polynomial_model_file, the offsets, and the provenance of the fit
 /// (method, the orders the structure uses, the AR method of an AR model,
-/// converged, sysid_version); the caller
+/// converged, a time series' residual_whiteness, sysid_version); the caller
 /// adds what only it knows (the log's name, validation data, an order search).
 inline ModelFile polynomial_fit_model_file(const PolynomialFit& fit, const PolynomialFitOptions& options,
                                            const std::vector<std::string>& input_names,
@@ -94,6 +94,16 @@ inline ModelFile polynomial_fit_model_file(const PolynomialFit& fit, const Polyn
   if (structure == PolynomialStructure::armax || structure == PolynomialStructure::arma) p["nc"] = orders.nc;
   if (structure == PolynomialStructure::oe) p["nf"] = orders.nf;
   p["converged"] = fit.converged;
+  // Per output, the Ljung-Box test of the one-step residuals on the estimation
+  // data (time series only; pem/residual_whiteness.hpp): what the residual-
+  // correlation warning rests on, for a reader of the file.
+  if (!fit.residual_whiteness.empty()) {
+    nlohmann::json tests = nlohmann::json::array();
+    for (const LjungBoxTest& t : fit.residual_whiteness)
+      tests.push_back({{"lags", t.lags}, {"statistic", t.statistic}, {"degrees_of_freedom", t.degrees_of_freedom},
+                       {"p_value", t.p_value}});
+    p["residual_whiteness"] = tests;
+  }
   p["sysid_version"] = SYSID_VERSION_STRING;
   return file;
 }

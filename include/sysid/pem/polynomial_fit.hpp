@@ -14,6 +14,7 @@
 #include <sysid/pem/arx.hpp>
 #include <sysid/pem/polynomial_model.hpp>
 #include <sysid/pem/prediction_error.hpp>
+#include <sysid/core/ljung_box.hpp>
 
 #include <Eigen/Dense>
 #include <string>
@@ -52,6 +53,14 @@ struct PolynomialFit {
   std::vector<double> loss;  ///< per output: mean squared one-step prediction error on the estimation data
   Eigen::Index parameters = 0;  ///< estimated coefficients of all outputs' models
   Eigen::Index samples = 0;     ///< estimation samples (all experiments)
+  /// Time series (AR, ARMA) only, per output: the Ljung-Box test of the one-step
+  /// residuals on the estimation data (pem/residual_whiteness.hpp). A residual
+  /// that is not white at level 0.1 % (over the outputs, Bonferroni) warns: the
+  /// model leaves correlation in the record, and least squares, Yule-Walker and
+  /// Burg then bias the poles when the cause is measurement noise (modified
+  /// Yule-Walker estimates are not tested: their residual A(q) y is coloured by
+  /// that noise by design). A record too short to test gives lags = 0, p = 1.
+  std::vector<LjungBoxTest> residual_whiteness;
   std::vector<std::string> warnings;
 };
 
