@@ -38,6 +38,7 @@ struct N4sidArgs {
   int horizon = 0;
   bool enforce_stability = false;
   bool allow_unstable = false;
+  std::string refine = "auto";
   std::string hankel = "auto";
   std::string validate;
   std::optional<double> split;
@@ -267,6 +268,7 @@ N4sidOutcome identify_n4sid(const N4sidArgs& a, bool keep_estimation) {
   options.route = hankel_route_from_name(a.hankel);
   options.enforce_stability = a.enforce_stability;
   options.allow_unstable = a.allow_unstable;
+  options.refine_poles = pole_refinement_mode_from_name(a.refine);
   // --band-limit: the Par2 remedy for gain the data do not determine above the
   // excited band (the model comes back in series with the low-pass at its inputs).
   if (a.band_limit_hz) options.band_limit_hz = *a.band_limit_hz;
@@ -344,6 +346,7 @@ N4sidOutcome identify_n4sid(const N4sidArgs& a, bool keep_estimation) {
   // Report.
   report << res.brief_report() << "\n";
   report << "order: " << res.order << " (" << res.order_rule << ")\n";
+  if (!res.refinement.empty()) report << "refinement: " << res.refinement << "\n";
   if (res.band_limited)
     report << "band limit: " << fmt(a.band_limit_hz.value_or(0.0), 4) << " Hz Butterworth low-pass in series at the inputs ("
            << res.model.order() << " states in total)\n";
@@ -443,6 +446,12 @@ Verb register_n4sid(CLI::App& app) {
   cmd->add_flag("--allow-unstable", args->allow_unstable,
                 "keep an unstable estimate of A (a plant that is itself unstable); by default its unstable poles are "
                 "reflected into the unit circle, with a warning");
+  cmd->add_option("--refine", args->refine,
+                  "re-estimate the poles on the simulation error after the subspace step (B, D, x0 by least squares, "
+                  "mode shapes held): auto (when --horizon differs from the automatic horizon, so the model does not "
+                  "hinge on it; skipped when one Jacobian would exceed 5e8 flops (large MIMO problems)), always, never")
+      ->check(CLI::IsMember({"auto", "always", "never"}))
+      ->capture_default_str();
   cmd->add_option("--hankel", args->hankel,
                   "Hankel compression route: qr (Householder), cholesky (structured Gram matrix: fastest, squares the "
                   "condition number), cholesky_double_double (the same Gram matrix in double-double: as accurate as qr "

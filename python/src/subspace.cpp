@@ -30,7 +30,8 @@ ModelFile identify_subspace(const std::optional<SampleArray>& u, const SampleArr
                             std::optional<int> horizon, std::optional<int> max_order, const std::string& order_rule,
                             bool enforce_stability, bool allow_unstable, std::optional<double> band_limit_hz,
                             int band_limit_order, std::optional<int> decimation, const std::string& hankel,
-                            const std::vector<std::string>& inputs, const std::vector<std::string>& outputs) {
+                            const std::vector<std::string>& inputs, const std::vector<std::string>& outputs,
+                            const std::string& refine) {
   if (!u) throw std::invalid_argument("n4sid: needs the inputs u (an AR or ARMA model describes a time series)");
   N4sidOptions options;
   options.weighting = subspace_weighting_from_name(method);
@@ -40,6 +41,7 @@ ModelFile identify_subspace(const std::optional<SampleArray>& u, const SampleArr
   if (horizon) options.horizon = *horizon;
   options.enforce_stability = enforce_stability;
   options.allow_unstable = allow_unstable;
+  options.refine_poles = pole_refinement_mode_from_name(refine);
   if (band_limit_hz) {
     if (!(*band_limit_hz > 0.0)) throw std::invalid_argument("band_limit_hz: expected a frequency > 0");
     options.band_limit_hz = *band_limit_hz;
@@ -92,7 +94,7 @@ void bind_subspace(nb::module_& m) {
         nb::arg("enforce_stability") = false, nb::arg("allow_unstable") = false, nb::arg("band_limit_hz") = nb::none(),
         nb::arg("band_limit_order") = N4sidOptions{}.band_limit_order, nb::arg("decimation") = nb::none(),
         nb::arg("hankel") = "auto", nb::arg("inputs") = std::vector<std::string>{},
-        nb::arg("outputs") = std::vector<std::string>{},
+        nb::arg("outputs") = std::vector<std::string>{}, nb::arg("refine") = "auto",
         "Subspace identification of a state-space model in innovation form from one record.\n\n"
         "u: samples x inputs (1-D for one input); y: samples x outputs; Ts: sample time [s].\n"
         "order: a number, or None/'auto' for the order_rule's choice (at most max_order).\n"
@@ -101,6 +103,8 @@ void bind_subspace(nb::module_& m) {
         "allow_unstable: keep an unstable least-squares A. band_limit_hz: low-pass the data and put the\n"
         "filter in series with the model (the Par2 remedy). decimation: None (automatic), 1 (none) or a factor.\n"
         "hankel: 'auto', 'qr', 'cholesky', 'cholesky_double_double'. inputs/outputs: channel names.\n"
+        "refine: 'auto' (re-estimate the poles on the simulation error when a given horizon differs from the\n"
+        "automatic one), 'always' or 'never'; provenance['pole_refinement'] says what it did.\n"
         "Returns a Model with K, x0, offsets and provenance (order rule, horizon, fit, singular values ...),\n"
         "the very model file `sysid n4sid` writes for the same data and options. Warnings (for example a\n"
         "poorly excited band) are issued as RuntimeWarning.");

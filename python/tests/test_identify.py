@@ -54,6 +54,24 @@ def test_the_automatic_order_equals_the_command_line(par2, data_dir, sysid_cli, 
     assert model.provenance["order_rule"] == json.loads(cli)["provenance"]["order_rule"]
 
 
+def test_a_refined_subspace_model_equals_the_command_line(par2, data_dir, sysid_cli, tmp_path):
+    # A horizon other than the automatic one: the poles are refined on the simulation
+    # error (issue 34 item 3), the same way from both; refine="never" keeps them.
+    u, y, Ts = par2
+    cli = cli_model(sysid_cli, tmp_path, "n4sid", data_dir / "par2_gu.csv", "--inputs", "u", "--outputs", "y",
+                    "--method", "moesp", "--order", "10", "--horizon", "30")
+    with pytest.warns(RuntimeWarning):
+        model = sysid.n4sid(u, y, Ts, order=10, method="moesp", horizon=30, inputs=["u"], outputs=["y"])
+    assert without_data(model.to_json()) == without_data(cli)
+    refinement = model.provenance["pole_refinement"]
+    assert refinement["refined"] and refinement["fit_after"] > refinement["fit_before"]
+    with pytest.warns(RuntimeWarning):
+        plain = sysid.n4sid(u, y, Ts, order=10, method="moesp", horizon=30, refine="never")
+    assert "pole_refinement" not in plain.provenance
+    with pytest.raises(ValueError):
+        sysid.n4sid(u, y, Ts, order=10, refine="sometimes")
+
+
 @pytest.mark.parametrize("verb, python_options, cli_options", [
     ("arx", dict(na=6, nb=6, nk=1), ["--na", "6", "--nb", "6"]),
     ("armax", dict(na=4, nb=4, nc=2), ["--na", "4", "--nb", "4", "--nc", "2"]),

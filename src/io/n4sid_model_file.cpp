@@ -28,6 +28,11 @@ ModelFile n4sid_model_file(const N4sidResult& result, const N4sidOptions& option
   p["decimation"] = result.decimation;
   p["observability_condition"] = result.observability_condition;
   p["past_future_min_sine"] = result.past_future_min_sine;
+  if (!result.refinement.empty())
+    p["pole_refinement"] = {{"refined", result.poles_refined},
+                            {"fit_before", result.refinement_fit_before},
+                            {"fit_after", result.refinement_fit_after},
+                            {"note", result.refinement}};
   if (options.enforce_stability) p["enforce_stability"] = true;
   if (options.allow_unstable) p["allow_unstable"] = true;
   if (options.band_limit_hz > 0.0) {

@@ -20,6 +20,7 @@
 #include <sysid/spectral/excited_band.hpp>
 #include <sysid/spectral/welch.hpp>
 #include <sysid/subspace/bdx_least_squares.hpp>
+#include <sysid/subspace/pole_refinement.hpp>
 #include <sysid/subspace/innovation_model.hpp>
 #include <sysid/validate/fit.hpp>
 
@@ -506,6 +507,47 @@ inline Eigen::MatrixXd reflect_unstable_poles(const Eigen::MatrixXd& a) {
 
 }  // namespace detail
 
+namespace {
+
+/// Whether n4sid refines the poles of a model of this order (N4sidOptions::refine_poles).
+bool will_refine_poles(const N4sidOptions& options, int order, const IoData& data) {
+  if (options.refine_poles == PoleRefinementMode::never || order < 1) return false;
+  if (options.refine_poles == PoleRefinementMode::always) return true;
+  return options.horizon > 0 && refinement_cost(order, data, options.bdx_max_samples) <= kPoleRefinementBudget;
+}
+
+/// The pole refinement step on the scaled data at the original rate, from the
+/// subspace model and `extra_starts` (the automatic horizon's, when the user gave
+/// another): the simulation error has local minima, and which start reaches the
+/// lower one depends on where the horizon left the weakly determined poles, so
+/// the starts are raced (subspace/pole_refinement.hpp). core.A (and core.C when
+/// another start won) replaced when that lowered the error.
+void refine_subspace_poles(detail::SubspaceCore& core, std::vector<PoleRefinementStart> extra_starts, const IoData& data,
+                           const N4sidOptions& options, N4sidResult& res) {
+  if (!(core.A.eigenvalues().cwiseAbs().maxCoeff() < 1.0)) {
+    res.refinement = "poles not refined: the model is unstable (kept by --allow-unstable)";
+    return;
+  }
+  std::vector<PoleRefinementStart> starts{{core.A, core.C}};
+  for (PoleRefinementStart& s : extra_starts) starts.push_back({detail::reflect_unstable_poles(s.A), std::move(s.C)});
+  PoleRefinementOptions ro;
+  ro.max_samples = options.bdx_max_samples;
+  const PoleRefinementResult r = refine_poles(starts, data, ro);
+  core.A = r.A;
+  core.C = r.C;
+  res.poles_refined = r.refined || r.start != 0;
+  res.refinement_fit_before = r.initial_fit;
+  res.refinement_fit_after = r.final_fit;
+  const std::string start = r.start == 0 ? "the subspace poles at horizon " + std::to_string(core.horizon)
+                                         : std::string("the subspace poles at the automatic horizon (the lower of the raced starts)");
+  res.refinement = res.poles_refined ? "poles refined on the simulation error from " + start + " (" +
+                                           std::to_string(r.iterations) + " iterations): estimation fit " +
+                                           format_number(r.initial_fit, 4) + " -> " + format_number(r.final_fit, 4) + " %"
+                                     : "poles kept from the subspace step (" + r.termination + ")";
+}
+
+}  // namespace
+
 N4sidResult n4sid(IoData data, const N4sidOptions& options) {
   data.validate();
   const Eigen::Index m = data.inputs(), l = data.outputs();
@@ -570,7 +612,7 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
   detail::SubspaceCore core;
   // The order is chosen at a horizon sized for max_order; the model of that
   // order is then identified at the horizon sized for it (unless the user fixed one).
-  auto identify = [&options](const IoData& d, bool low_passed) {
+  auto identify = [](const IoData& d, bool low_passed, const N4sidOptions& options) {
     detail::SubspaceCore c = detail::subspace_core(d, options, low_passed);
     // With a stabilisation diagram the model comes from the diagram's compression.
     const bool diagram = options.stabilization_order_hi > 0 || options.order_rule == OrderRule::stabilization;
@@ -608,15 +650,43 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
     }
     return c;
   };
+  // The pole refinement (refine_subspace_poles): whether it runs, and its second
+  // start, the subspace model of the automatic horizon for the same order. In
+  // automatic mode it runs only for a horizon the user gave that differs from
+  // the one the tool would choose (detail::automatic_horizon, lengthened to span
+  // the slowest mode as identify does): the automatic path is left as it is.
+  bool refine = false;
+  std::vector<PoleRefinementStart> extra_starts;
+  auto prepare_refinement = [&](const IoData& d, bool low_passed) {
+    if (!will_refine_poles(options, core.order, data) || core.A.size() == 0) return;
+    if (options.refine_poles == PoleRefinementMode::automatic) {
+      double slowest_hz = 0.0;
+      const int automatic = std::max(detail::automatic_horizon(core.order, options.max_order, d.outputs()),
+                                     detail::horizon_for_slowest_mode(core.A, d, slowest_hz));
+      if (automatic == core.horizon) return;
+    }
+    refine = true;
+    if (options.horizon == 0) return;  // the automatic horizon is the start already
+    N4sidOptions automatic = options;
+    automatic.horizon = 0;
+    automatic.order = core.order;
+    automatic.stabilization_order_lo = automatic.stabilization_order_hi = 0;
+    if (automatic.order_rule == OrderRule::stabilization) automatic.order_rule = OrderRule::automatic;
+    detail::SubspaceCore c = identify(d, low_passed, automatic);
+    if (c.horizon != core.horizon && c.A.size() > 0) extra_starts.push_back({std::move(c.A), std::move(c.C)});
+  };
   if (res.decimation > 1) {
-    core = identify(decimated, true);
+    core = identify(decimated, true, options);
+    prepare_refinement(decimated, true);
     decimated = IoData();  // the rest runs at the original rate: free the copy
     core.A = detail::principal_root(core.A, res.decimation);
+    for (PoleRefinementStart& start : extra_starts) start.A = detail::principal_root(start.A, res.decimation);
     res.warnings.push_back("n4sid: the inputs excite only 0.." + format_number(band_hi) + " Hz of " + format_number(nyquist) +
                            " Hz: identified on a grid decimated by " + std::to_string(res.decimation) +
                            " (A mapped back by its principal root, B, D, x0 fitted at the original rate)");
   } else {
-    core = identify(data, false);
+    core = identify(data, false, options);
+    prepare_refinement(data, false);
   }
   // An unstable A from a stable plant's data is an estimation artefact (a
   // horizon or an order the data do not support): its poles are reflected into
@@ -653,6 +723,7 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
       }
     }
   }
+  if (refine) refine_subspace_poles(core, extra_starts, data, options, res);
   res.singular_values = core.singular_values;
   res.canonical_correlations = core.canonical_correlations;
   res.stabilization = std::move(core.stabilization);
@@ -676,8 +747,11 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
   Eigen::MatrixXd B = core.B, D = core.D;
   const Eigen::MatrixXd& cov = core.covariance;
 
+  // The subspace step's covariances belong to its own A: with refined poles the
+  // noise model comes from the residuals, as on a decimated grid.
+  const bool noise_model_from_residuals = options.estimate_kalman_gain && (res.decimation > 1 || res.poles_refined);
   Eigen::MatrixXd K, innovation = cov.bottomRightCorner(l, l);
-  if (options.estimate_kalman_gain && res.decimation == 1) {
+  if (options.estimate_kalman_gain && !noise_model_from_residuals) {
     const KalmanFilterResult kf =
         steady_state_kalman_filter(A, C, cov.topLeftCorner(n, n), cov.bottomRightCorner(l, l), cov.topRightCorner(n, l));
     res.kalman_iterations = kf.iterations;
@@ -691,7 +765,7 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
 
   // Step 6: B, D, x0 on the simulation error.
   std::vector<Eigen::VectorXd> x0(data.experiments.size(), Eigen::VectorXd::Zero(n));
-  if (options.refine_bdx) {
+  if (options.refine_bdx || res.poles_refined) {  // refined poles need their own B, D, x0
     BdxLeastSquaresOptions bo;
     bo.max_samples = options.bdx_max_samples;
     const BdxLeastSquaresResult bdx = bdx_least_squares(A, C, data, bo);
@@ -739,7 +813,6 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
   // On a decimated grid the projections give K at the wrong rate: the noise
   // model comes from the residuals at the original rate instead
   // (subspace/innovation_model.hpp).
-  const bool noise_model_from_residuals = options.estimate_kalman_gain && res.decimation > 1;
   std::vector<std::string> fit_warnings, model_warnings;
   auto fit_and_noise_model = [&] {
     std::vector<Eigen::MatrixXd> residuals;

@@ -80,15 +80,19 @@ TEST_P(Par2Acceptance, DoubleDoubleGramRouteGivesTheQrRouteModel) {
   EXPECT_NEAR(fit_dd, fit_qr, 0.05);
 }
 
-// Issue 34 item 3: no horizon from 15 to 60 writes an unstable model any more
-// (an unstable least-squares A has its poles reflected into the unit circle when
-// that fits the record better, n4sid.hpp). The in-band validation fit is printed:
-// the issue asks for every horizon within 2 points of the true model's (99.7),
-// which is not reached yet — 2026-11-29, clang 14 -O2: n4sid 91.9-98.8, MOESP
-// 82.4-99.0, CVA 81.0-99.0 over these horizons (see the issue's note).
-TEST_P(Par2Acceptance, EveryHorizonFromFifteenToSixtyGivesAStableModel) {
+// Issue 34 item 3: at every horizon from 15 to 60 every weighting writes a stable
+// model within 2 points of the true model's in-band validation fit (99.7). The
+// subspace poles alone ranged 81.0-99.0 over these horizons (a heavily damped
+// mode at the band's edge left near the projection's noise floor at long
+// horizons); a given horizon other than the automatic one (20 here) has its poles
+// refined on the simulation error from two raced starts (n4sid.hpp,
+// refine_poles), which reaches the true model's poles. Under the sanitizers:
+// horizon 60 with MOESP only (the refinement's path; each call costs ~30 s there).
+TEST_P(Par2Acceptance, EveryHorizonFromFifteenToSixtyGivesAStableModelWithinTwoPointsOfTheTrueFit) {
   const auto& ref = par2_reference();
-  const std::vector<int> horizons = test::kSanitized ? std::vector<int>{15, 60} : std::vector<int>{15, 20, 25, 30, 40, 50, 60};
+  const std::vector<int> horizons = !test::kSanitized                           ? std::vector<int>{15, 20, 25, 30, 40, 50, 60}
+                                    : GetParam() == SubspaceWeighting::moesp ? std::vector<int>{60}
+                                                                              : std::vector<int>{};
   for (const int horizon : horizons) {
     N4sidOptions opt;
     opt.weighting = GetParam();
@@ -98,12 +102,23 @@ TEST_P(Par2Acceptance, EveryHorizonFromFifteenToSixtyGivesAStableModel) {
     const double radius = r.model.A.eigenvalues().cwiseAbs().maxCoeff();
     const double fit = par2_in_band_fit(r.model, r.input_offset, r.output_offset, ref.validation);
     std::cout << to_string(GetParam()) << " horizon " << horizon << ": spectral radius " << radius << ", in-band validation fit "
-              << fit << " (true model " << ref.true_fit << ")" << (r.reflected_spectral_radius > 0 ? ", poles reflected" : "")
-              << "\n";
+              << fit << " (true model " << ref.true_fit << "); " << (r.refinement.empty() ? "not refined" : r.refinement) << "\n";
     EXPECT_LT(radius, 1.0) << "horizon " << horizon;
+    EXPECT_GT(fit, ref.true_fit - 2.0) << "horizon " << horizon;
     EXPECT_EQ(r.horizon, horizon);
     EXPECT_EQ(r.horizon_rule, "given by the user");
+    // The automatic horizon for order 10 (20) keeps the subspace poles; every other is refined.
+    EXPECT_EQ(r.poles_refined, horizon != 20) << "horizon " << horizon << ": " << r.refinement;
   }
+  // refine_poles = never: the subspace poles as they are (the peers' comparison in bench/).
+  N4sidOptions never;
+  never.weighting = GetParam();
+  never.order = 10;
+  never.horizon = 60;
+  never.refine_poles = PoleRefinementMode::never;
+  const N4sidResult plain = n4sid(ref.estimation, never);
+  EXPECT_FALSE(plain.poles_refined);
+  EXPECT_TRUE(plain.refinement.empty());
 }
 
 // The N4SID weighting (W1 = W2 = I) uses the oblique projection itself; on this

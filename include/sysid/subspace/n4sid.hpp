@@ -85,6 +85,25 @@ inline SubspaceWeighting subspace_weighting_from_name(const std::string& name) {
   throw std::invalid_argument("method: expected 'n4sid', 'moesp' or 'cva', found '" + name + "'");
 }
 
+/// When n4sid re-estimates the poles on the simulation error (N4sidOptions::refine_poles).
+enum class PoleRefinementMode { automatic, always, never };
+
+/// "auto", "always", "never" (the command line's --refine, Python's refine=); std::invalid_argument otherwise.
+inline PoleRefinementMode pole_refinement_mode_from_name(const std::string& name) {
+  if (name == "auto") return PoleRefinementMode::automatic;
+  if (name == "always") return PoleRefinementMode::always;
+  if (name == "never") return PoleRefinementMode::never;
+  throw std::invalid_argument("refine: expected 'auto', 'always' or 'never', found '" + name + "'");
+}
+
+/// One Jacobian of the automatic pole refinement at most (refinement_cost): 5e8
+/// floating-point operations by that count. The Par2 log at order 10 (1.8e8)
+/// takes 0.12 s a Jacobian and 1.9 s in all from horizon 60 (two raced starts,
+/// clang -O2, one 2-core VM); an F-16 family member (3 outputs, order 30, 50 000 samples: 1.8e10)
+/// ran for minutes, and 28 outputs at order 30 on 8 500 samples (1.5e11) would
+/// take longer: those are left to refine_poles = always.
+inline constexpr double kPoleRefinementBudget = 5e8;
+
 struct N4sidOptions {
   SubspaceWeighting weighting = SubspaceWeighting::n4sid;
   /// Model order; 0 = choose automatically from the singular values (see order_rule).
@@ -118,6 +137,14 @@ struct N4sidOptions {
   /// better than the reflected one (a growing record: a plant that is itself
   /// unstable). Set it to keep the unstable estimate in any case.
   bool allow_unstable = false;
+  /// Poles re-estimated on the simulation error after the subspace step
+  /// (subspace/pole_refinement.hpp: A's eigenvalues by Levenberg-Marquardt, B, D,
+  /// x0 by least squares, C held). automatic: when the horizon was given (a
+  /// user's guess: the subspace poles of the directions the projection leaves
+  /// near its noise floor move with it, the refined ones do not; the automatic
+  /// horizon is sized to the order and the slowest mode) and one Jacobian costs
+  /// at most kPoleRefinementBudget floating-point operations; always; never.
+  PoleRefinementMode refine_poles = PoleRefinementMode::automatic;
   bool estimate_kalman_gain = true;
   bool refine_bdx = true;               ///< B, D, x0 by least squares on the simulation error (step 6)
   /// Per experiment, bounds the cost of step 6 (O(N l p^2)); 50 000 samples
@@ -195,6 +222,12 @@ struct N4sidResult {
   int decimation = 1;  ///< factor of the grid the subspace step ran on (1 = original rate)
   bool band_limited = false;  ///< model includes the band-limiting Butterworth filter at its inputs (order + m * filter order)
   std::vector<std::string> warnings;
+  /// The pole refinement (N4sidOptions::refine_poles): whether it ran and changed
+  /// A, the estimation fits before and after, and in words what happened
+  /// ("" when it did not run).
+  bool poles_refined = false;
+  double refinement_fit_before = 0, refinement_fit_after = 0;
+  std::string refinement;
   int kalman_iterations = 0;
   /// The stabilisation diagram when asked for (N4sidOptions::stabilization_order_hi
   /// or the stabilization order rule); order_hi = 0 otherwise.
