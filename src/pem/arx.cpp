@@ -5,6 +5,8 @@
 #include <sysid/pem/lagged_regression.hpp>
 #include <sysid/signal/polynomial_filter.hpp>
 
+#include "pem/detail/pooled_autocorrelation.hpp"
+
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -42,18 +44,6 @@ std::vector<Eigen::MatrixXd> output_signals(const IoData& data, Eigen::Index r, 
     s.push_back(std::move(m));
   }
   return s;
-}
-
-/// Biased sample autocorrelation r(0..max_lag) pooled over experiments: each
-/// lag's products summed inside every series, divided by the total samples.
-Eigen::VectorXd pooled_autocorrelation(const std::vector<Eigen::VectorXd>& series, int max_lag) {
-  Eigen::VectorXd acf = Eigen::VectorXd::Zero(max_lag + 1);
-  double count = 0;
-  for (const auto& x : series) {
-    for (int k = 0; k <= max_lag && k < x.size(); ++k) acf(k) += x.head(x.size() - k).dot(x.tail(x.size() - k));
-    count += static_cast<double>(x.size());
-  }
-  return acf / count;
 }
 
 /// The overdetermined modified Yule-Walker equations (Stoica & Moses 2005, eq.

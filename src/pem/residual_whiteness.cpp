@@ -3,6 +3,8 @@
 #include <sysid/pem/residual_whiteness.hpp>
 #include <sysid/signal/polynomial_filter.hpp>
 
+#include "pem/detail/pooled_autocorrelation.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -52,11 +54,8 @@ std::optional<LjungBoxTest> one_step_residual_whiteness(const PolynomialModel& m
   const Eigen::Index parameters = model.na() + model.nc();
   if (lags <= parameters || samples <= 5 * lags) return std::nullopt;
   const double mean = sum / static_cast<double>(samples);
-  Eigen::VectorXd acf = Eigen::VectorXd::Zero(lags + 1);
-  for (auto& r : residuals) {
-    r.array() -= mean;
-    for (Eigen::Index k = 0; k <= lags && k < r.size(); ++k) acf(k) += r.head(r.size() - k).dot(r.tail(r.size() - k));
-  }
+  for (auto& r : residuals) r.array() -= mean;
+  Eigen::VectorXd acf = detail::pooled_autocorrelation(residuals, lags);
   if (!(acf(0) > 0.0)) return LjungBoxTest{samples, lags, 0.0, static_cast<double>(lags - parameters), 1.0};
   acf /= acf(0);
   return ljung_box_test(acf, samples, lags, parameters);

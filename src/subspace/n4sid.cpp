@@ -236,18 +236,23 @@ inline void select_order_when_svc_finds_none(SubspaceCore& res, const OrderSearc
 /// `low_passed`: the data were low-passed for decimation (the top of their band
 /// is empty), so the block-Hankel compression starts at its double-double Gram
 /// matrix (BlockHankelOptions::double_gram_first).
+/// The horizon subspace_core uses when options.horizon is 0 (before the
+/// slowest-mode rule of n4sid's identify step): sized for the order, or for a
+/// stabilisation diagram, and shortened to what the record holds.
+inline int default_horizon(const N4sidOptions& options, const IoData& data) {
+  const Eigen::Index l = data.outputs();
+  int horizon = automatic_horizon(options.order, options.max_order, l);
+  if (options.stabilization_order_hi > 0 || options.order_rule == OrderRule::stabilization)
+    horizon = std::max({horizon, automatic_horizon(0, options.stabilization_order_hi, l), kStabilizationMinHorizon});
+  return record_limited_horizon(horizon, data);
+}
+
 inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& options, bool low_passed) {
   const Eigen::Index m = data.inputs(), l = data.outputs();
   SubspaceCore res;
   // Horizon.
   const int n_max = options.order > 0 ? options.order : options.max_order;
-  int horizon = options.horizon;
-  if (horizon == 0) {
-    horizon = automatic_horizon(options.order, options.max_order, l);
-    if (options.stabilization_order_hi > 0 || options.order_rule == OrderRule::stabilization)
-      horizon = std::max({horizon, automatic_horizon(0, options.stabilization_order_hi, l), kStabilizationMinHorizon});
-    horizon = record_limited_horizon(horizon, data);
-  }
+  const int horizon = options.horizon > 0 ? options.horizon : default_horizon(options, data);
   if (horizon < 2) throw std::invalid_argument("n4sid: need horizon >= 2");
   // A user-given order must fit under the horizon; an automatic choice is capped by it.
   if (options.order > 0 && static_cast<Eigen::Index>(horizon) * l <= n_max)
@@ -653,25 +658,25 @@ N4sidResult n4sid(IoData data, const N4sidOptions& options) {
   // The pole refinement (refine_subspace_poles): whether it runs, and its second
   // start, the subspace model of the automatic horizon for the same order. In
   // automatic mode it runs only for a horizon the user gave that differs from
-  // the one the tool would choose (detail::automatic_horizon, lengthened to span
+  // the one the tool would choose (detail::default_horizon, lengthened to span
   // the slowest mode as identify does): the automatic path is left as it is.
   bool refine = false;
   std::vector<PoleRefinementStart> extra_starts;
   auto prepare_refinement = [&](const IoData& d, bool low_passed) {
     if (!will_refine_poles(options, core.order, data) || core.A.size() == 0) return;
-    if (options.refine_poles == PoleRefinementMode::automatic) {
-      double slowest_hz = 0.0;
-      const int automatic = std::max(detail::automatic_horizon(core.order, options.max_order, d.outputs()),
-                                     detail::horizon_for_slowest_mode(core.A, d, slowest_hz));
-      if (automatic == core.horizon) return;
-    }
-    refine = true;
-    if (options.horizon == 0) return;  // the automatic horizon is the start already
-    N4sidOptions automatic = options;
+    N4sidOptions automatic = options;  // this order at the automatic horizon, without a diagram
     automatic.horizon = 0;
     automatic.order = core.order;
     automatic.stabilization_order_lo = automatic.stabilization_order_hi = 0;
     if (automatic.order_rule == OrderRule::stabilization) automatic.order_rule = OrderRule::automatic;
+    if (options.refine_poles == PoleRefinementMode::automatic) {
+      double slowest_hz = 0.0;
+      const int tool_horizon =
+          std::max(detail::default_horizon(automatic, d), detail::horizon_for_slowest_mode(core.A, d, slowest_hz));
+      if (tool_horizon == core.horizon) return;
+    }
+    refine = true;
+    if (options.horizon == 0) return;  // the automatic horizon is the start already
     detail::SubspaceCore c = identify(d, low_passed, automatic);
     if (c.horizon != core.horizon && c.A.size() > 0) extra_starts.push_back({std::move(c.A), std::move(c.C)});
   };

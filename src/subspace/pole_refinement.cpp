@@ -67,17 +67,20 @@ class RefinementProblem final : public LevenbergMarquardt::Problem {
     m_bdx.max_samples = max_samples;
     // Each output's residual is divided by its spread about the mean over the
     // samples used, so that 1 - ||r_i|| is its fit and the outputs weigh alike.
+    // Two passes (mean, then squares about it): outputs riding on an offset lose
+    // no digits to cancellation.
     const Eigen::Index l = data.outputs();
-    Eigen::VectorXd sum = Eigen::VectorXd::Zero(l), sum2 = Eigen::VectorXd::Zero(l);
+    Eigen::VectorXd sum = Eigen::VectorXd::Zero(l);
     for (const Experiment& e : data.experiments) {
       const Eigen::Index used = std::min(e.samples(), max_samples);
       m_rows += used * l;
-      m_samples += used;
       sum += e.y.topRows(used).colwise().sum().transpose();
-      sum2 += e.y.topRows(used).colwise().squaredNorm().transpose();
     }
-    const double count = static_cast<double>(m_samples);
-    m_spread = (sum2 - sum.cwiseAbs2() / count).cwiseMax(0.0).cwiseSqrt();
+    const Eigen::RowVectorXd mean = (sum / static_cast<double>(m_rows / l)).transpose();
+    Eigen::VectorXd squares = Eigen::VectorXd::Zero(l);
+    for (const Experiment& e : data.experiments)
+      squares += (e.y.topRows(std::min(e.samples(), max_samples)).rowwise() - mean).colwise().squaredNorm().transpose();
+    m_spread = squares.cwiseSqrt();
     for (Eigen::Index i = 0; i < l; ++i)
       if (!(m_spread(i) > 0.0)) m_spread(i) = 1.0;  // a constant output: its error counts in its own units
     m_residual = residual(m_theta).value_or(Eigen::VectorXd());
@@ -173,7 +176,7 @@ class RefinementProblem final : public LevenbergMarquardt::Problem {
   Eigen::VectorXd m_residual, m_candidate_residual;
   BdxLeastSquaresOptions m_bdx;
   Eigen::VectorXd m_spread;
-  Eigen::Index m_rows = 0, m_samples = 0;
+  Eigen::Index m_rows = 0;
 };
 
 }  // namespace

@@ -44,6 +44,23 @@ inline StateSpace random_modal_system(int modes, int inputs, int outputs, std::u
   return StateSpace(t * a * ti, t * b, c * ti, d, 1.0);
 }
 
+/// blockdiag([[Re z, Im z], [-Im z, Re z]]) over the modes, z = exp(s Ts),
+/// s = 2 pi f (-zeta + j sqrt(1 - zeta^2)) (f in Hz; with Ts = 1, in cycles per sample).
+inline Eigen::MatrixXd modal_block_matrix(const std::vector<double>& f, const std::vector<double>& zeta, double Ts) {
+  const auto n = static_cast<Eigen::Index>(2 * f.size());
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n);
+  for (std::size_t k = 0; k < f.size(); ++k) {
+    const std::complex<double> z =
+        std::exp(2.0 * std::numbers::pi * f[k] * Ts * std::complex<double>(-zeta[k], std::sqrt(1.0 - zeta[k] * zeta[k])));
+    const auto i = static_cast<Eigen::Index>(2 * k);
+    A(i, i) = z.real();
+    A(i, i + 1) = z.imag();
+    A(i + 1, i) = -z.imag();
+    A(i + 1, i + 1) = z.real();
+  }
+  return A;
+}
+
 /// Discrete modal system with sample time Ts: one 2x2 real block per mode with
 /// poles exp(s Ts), s = 2 pi f (-zeta +/- j sqrt(1 - zeta^2)) (f in Hz; with Ts = 1,
 /// in cycles per sample), B, C, D uniform in [-1, 1], then a random similarity
@@ -53,16 +70,7 @@ inline StateSpace rotated_modal_system(const std::vector<double>& f, const std::
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   const int n = 2 * static_cast<int>(f.size());
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n);
-  for (std::size_t k = 0; k < f.size(); ++k) {
-    const std::complex<double> z =
-        std::exp(2.0 * std::numbers::pi * f[k] * Ts * std::complex<double>(-zeta[k], std::sqrt(1.0 - zeta[k] * zeta[k])));
-    const int i = 2 * static_cast<int>(k);
-    A(i, i) = z.real();
-    A(i, i + 1) = z.imag();
-    A(i + 1, i) = -z.imag();
-    A(i + 1, i + 1) = z.real();
-  }
+  const Eigen::MatrixXd A = modal_block_matrix(f, zeta, Ts);
   Eigen::MatrixXd B(n, m), C(l, n), D(l, m), T(n, n);
   for (Eigen::MatrixXd* M : {&B, &C, &D, &T})
     for (Eigen::Index r = 0; r < M->rows(); ++r)

@@ -24,20 +24,14 @@ namespace {
 
 constexpr double kTs = 1e-3;
 
-/// blockdiag of [[Re, Im], [-Im, Re]] for modes (f Hz, zeta) at kTs.
+/// The modal block matrix (test::modal_block_matrix) of modes (f Hz, zeta) at kTs.
 Eigen::MatrixXd modal_a(const std::vector<std::pair<double, double>>& modes) {
-  const Eigen::Index n = 2 * static_cast<Eigen::Index>(modes.size());
-  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
-  for (std::size_t k = 0; k < modes.size(); ++k) {
-    const auto [f, zeta] = modes[k];
-    const double w = 2.0 * std::numbers::pi * f;
-    const std::complex<double> z = std::exp(std::complex<double>(-zeta * w, w * std::sqrt(1.0 - zeta * zeta)) * kTs);
-    const auto i = static_cast<Eigen::Index>(2 * k);
-    a(i, i) = a(i + 1, i + 1) = z.real();
-    a(i, i + 1) = z.imag();
-    a(i + 1, i) = -z.imag();
+  std::vector<double> f, zeta;
+  for (const auto& [fk, zk] : modes) {
+    f.push_back(fk);
+    zeta.push_back(zk);
   }
-  return a;
+  return test::modal_block_matrix(f, zeta, kTs);
 }
 
 const std::vector<std::pair<double, double>> kTrueModes{{20.0, 0.02}, {70.0, 0.05}};

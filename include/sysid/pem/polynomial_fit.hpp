@@ -58,8 +58,9 @@ struct PolynomialFit {
   /// that is not white at level 0.1 % (over the outputs, Bonferroni) warns: the
   /// model leaves correlation in the record, and least squares, Yule-Walker and
   /// Burg then bias the poles when the cause is measurement noise (modified
-  /// Yule-Walker estimates are not tested: their residual A(q) y is coloured by
-  /// that noise by design). A record too short to test gives lags = 0, p = 1.
+  /// Yule-Walker estimates are tested but not warned of: their residual A(q) y
+  /// is coloured by that noise by design). A record too short to test gives
+  /// lags = 0, p = 1.
   std::vector<LjungBoxTest> residual_whiteness;
   std::vector<std::string> warnings;
 };
