@@ -48,6 +48,7 @@ struct N4sidArgs {
   std::string out;
   std::string plot;
   std::string stabilization;
+  double noise_shape_level = StabilizationOptions{}.random_shape_level;
 };
 
 /// The singular values (and, when present, the canonical correlations of the SVC
@@ -134,15 +135,19 @@ void write_stabilization(const std::string& path, const StabilizationDiagram& d,
     curve.y = Eigen::Map<const Eigen::VectorXd>(y.data(), static_cast<Eigen::Index>(y.size()));
     panel.curves.push_back(std::move(curve));
   }
-  for (std::size_t k = 0; k < d.modes.size(); ++k) {
-    PlotCurve line;
-    line.title = k == 0 ? "physical modes" : "";
-    line.dashed = true;
-    line.color = 6;
-    line.x = Eigen::VectorXd::Constant(2, d.modes[k].freq_hz);
-    line.y = (Eigen::VectorXd(2) << d.order_lo, d.order_hi).finished();
-    panel.curves.push_back(std::move(line));
-  }
+  const auto add_lines = [&](const std::vector<PhysicalMode>& columns, const std::string& title, int color) {
+    for (std::size_t k = 0; k < columns.size(); ++k) {
+      PlotCurve line;
+      line.title = k == 0 ? title : "";
+      line.dashed = true;
+      line.color = color;
+      line.x = Eigen::VectorXd::Constant(2, columns[k].freq_hz);
+      line.y = (Eigen::VectorXd(2) << d.order_lo, d.order_hi).finished();
+      panel.curves.push_back(std::move(line));
+    }
+  };
+  add_lines(d.modes, "physical modes", 6);
+  add_lines(d.random_shape_columns, "noise-like shapes (not modes)", 7);
   PlotFigure fig;
   fig.title = "stabilization diagram of " + log_path + ": " + std::to_string(d.modes.size()) + " physical modes" +
               (d.chosen_order > 0 ? ", all present from order " + std::to_string(d.chosen_order) : std::string());
@@ -284,6 +289,7 @@ N4sidOutcome identify_n4sid(const N4sidArgs& a, bool keep_estimation) {
     options.order = 0;
     options.order_rule = OrderRule::stabilization;
     options.stabilization_order_lo = order.lo;
+    options.stabilization.random_shape_level = a.noise_shape_level;
     options.stabilization_order_hi = order.hi;
     res = n4sid(std::move(estimation), options);
     const StabilizationDiagram& d = res.stabilization;
@@ -293,6 +299,10 @@ N4sidOutcome identify_n4sid(const N4sidArgs& a, bool keep_estimation) {
       report << "no physical mode: no column of stable poles\n";
     else
       report << "physical modes (columns of stable poles):\n" << d.modes_table();
+    if (!d.random_shape_columns.empty())
+      report << "not modes: columns whose shapes are no more collinear than noise's (MPC; the high orders fit the sensor "
+                "noise; --noise-shape-level 0 counts them):\n"
+             << d.random_shape_columns_table();
     report << "\n";
     if (validation) {
       CompareOptions co;
@@ -480,7 +490,7 @@ Verb register_n4sid(CLI::App& app) {
             return "expected auto, 1 or an odd factor >= 3, found '" + s + "'";
           },
           "auto|1|R"));
-  cmd->add_option("--stabilization", args->stabilization,
+  CLI::Option* stabilization = cmd->add_option("--stabilization", args->stabilization,
                   "FILE (.csv, .svg or .png): the stabilisation diagram of the orders of --order LO:HI, from one "
                   "compression: every pole marked stable in frequency (1 %), damping (5 %) and, with several outputs, "
                   "mode shape (MAC >= 0.98) against the order below; the physical modes are printed and the model's "
@@ -492,6 +502,13 @@ Verb register_n4sid(CLI::App& app) {
             return "expected a file name ending in .csv, .svg or .png, found '" + s + "'";
           },
           "FILE.csv|.svg|.png"));
+  cmd->add_option("--noise-shape-level", args->noise_shape_level,
+                  "with --stabilization and many outputs (about 17 or more): a column whose mode shapes are no more "
+                  "collinear (MPC) than random noise's at this level is named and not counted as a mode; 0 counts every "
+                  "column (structures with strongly non-proportional damping have complex modes)")
+      ->check(CLI::Range(0.0, 0.5))
+      ->capture_default_str()
+      ->needs(stabilization);
   cmd->add_option("--out", args->out, "model file to write (JSON, with K, offsets, x0 and provenance)");
   cmd->add_option("--plot", args->plot,
                   "plot of the singular values (and canonical correlations) that chose the order (.svg or .png; needs gnuplot)")

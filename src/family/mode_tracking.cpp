@@ -1,5 +1,6 @@
 // Implementation of family/mode_tracking.hpp (method in the header).
 #include <sysid/family/mode_tracking.hpp>
+#include <sysid/core/modal_assurance_criterion.hpp>
 #include <sysid/core/modal_table.hpp>
 
 #include <algorithm>
@@ -16,10 +17,10 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+/// MAC, or 1 (no evidence against the pairing) when a shape is missing.
 double mac(const Eigen::VectorXcd& a, const Eigen::VectorXcd& b) {
   if (a.size() == 0 || b.size() == 0 || a.size() != b.size()) return 1.0;
-  const double na = a.squaredNorm(), nb = b.squaredNorm();
-  return na > 0.0 && nb > 0.0 ? std::norm(a.dot(b)) / (na * nb) : 0.0;
+  return modal_assurance_criterion(a, b);
 }
 
 /// Cost of pairing two modes, or +inf when the pair fails the gate.

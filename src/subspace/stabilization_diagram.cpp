@@ -2,6 +2,8 @@
 #include <sysid/subspace/stabilization_diagram.hpp>
 
 #include <sysid/core/format_number.hpp>
+#include <sysid/core/median.hpp>
+#include <sysid/core/modal_phase_collinearity.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -15,12 +17,6 @@
 namespace sysid {
 
 namespace {
-
-double median_of(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t h = v.size() / 2;
-  return v.size() % 2 == 1 ? v[h] : 0.5 * (v[h - 1] + v[h]);
-}
 
 /// The mode candidates of one order: oscillatory poles (Im z > 0) with a damping
 /// ratio in (0, max_damping], by frequency.
@@ -105,14 +101,38 @@ std::vector<std::vector<StabilizationPole*>> stable_columns(std::vector<Stabiliz
   return columns;
 }
 
-}  // namespace
-
-double modal_assurance_criterion(const Eigen::VectorXcd& a, const Eigen::VectorXcd& b) {
-  if (a.size() != b.size() || a.size() == 0) return 0.0;
-  const double na = a.squaredNorm(), nb = b.squaredNorm();
-  if (!(na > 0.0 && nb > 0.0)) return 0.0;
-  return std::norm(a.dot(b)) / (na * nb);  // a.dot(b) = a^H b
+/// Whether a pole's shape is no more collinear than a random shape of as many
+/// effective outputs is with probability `level` (header comment); false when
+/// the shape spreads over too few outputs for the test to tell.
+bool random_like_shape(const Eigen::VectorXcd& shape, double level) {
+  const double outputs = shape_effective_outputs(shape);
+  if (!(outputs > 1.0)) return false;
+  const double quantile = random_shape_collinearity_quantile(outputs, level);
+  return quantile <= 0.5 && quadrature_tolerant_collinearity(shape) < quantile;
 }
+
+/// The table of modes_table() for any list of columns, the first heading `label`.
+std::string columns_table(const std::vector<PhysicalMode>& columns, bool with_shapes, const char* label) {
+  std::ostringstream s;
+  char buf[200];
+  std::snprintf(buf, sizeof buf, "%6s  %12s  %10s  %12s  %12s  %6s  %7s", label, "freq [Hz]", "damping", "freq spread",
+                "damp spread", "from", "stable");
+  s << buf << (with_shapes ? "      MPC\n" : "\n");
+  for (std::size_t k = 0; k < columns.size(); ++k) {
+    const PhysicalMode& m = columns[k];
+    std::snprintf(buf, sizeof buf, "%6zu  %12.6g  %10.4g  %11.3g%%  %11.3g%%  %6d  %7d", k + 1, m.freq_hz, m.damping,
+                  100.0 * m.freq_spread, 100.0 * m.damping_spread, m.first_order, m.stable_poles);
+    s << buf;
+    if (with_shapes) {
+      std::snprintf(buf, sizeof buf, "  %7.3f", m.shape_collinearity);
+      s << buf;
+    }
+    s << "\n";
+  }
+  return s.str();
+}
+
+}  // namespace
 
 StabilizationDiagram stabilization_diagram(const std::vector<OrderPoles>& orders, double Ts, const StabilizationOptions& o) {
   if (!(Ts > 0.0)) throw std::invalid_argument("stabilization diagram: need Ts > 0");
@@ -122,6 +142,8 @@ StabilizationDiagram stabilization_diagram(const std::vector<OrderPoles>& orders
       throw std::invalid_argument("stabilization diagram: need consecutive increasing orders");
   if (!(o.frequency_tolerance > 0.0 && o.damping_tolerance > 0.0 && o.mac_tolerance > 0.0 && o.max_damping > 0.0))
     throw std::invalid_argument("stabilization diagram: need positive tolerances and max_damping");
+  if (!(o.random_shape_level >= 0.0 && o.random_shape_level < 1.0))
+    throw std::invalid_argument("stabilization diagram: need 0 <= random_shape_level < 1");
   StabilizationDiagram d;
   d.options = o;
   d.order_lo = orders.front().order;
@@ -143,12 +165,17 @@ StabilizationDiagram stabilization_diagram(const std::vector<OrderPoles>& orders
   for (auto& column : stable_columns(d.poles, d.with_shapes, o)) {
     int first = std::numeric_limits<int>::max();
     const StabilizationPole* top = nullptr;
-    std::vector<double> f, z;
+    std::vector<double> f, z, collinearity;
+    int random_like = 0;
     for (const auto* p : column) {
       first = std::min(first, p->order);
       if (top == nullptr || p->order > top->order) top = p;
       f.push_back(p->freq_hz);
       z.push_back(p->damping);
+      if (d.with_shapes) {
+        collinearity.push_back(quadrature_tolerant_collinearity(p->shape));
+        random_like += o.random_shape_level > 0.0 && random_like_shape(p->shape, o.random_shape_level);
+      }
     }
     const int span = d.order_hi - first + 1;
     const double latest_start = d.order_lo + o.latest_column_start * (d.order_hi - d.order_lo);
@@ -156,20 +183,30 @@ StabilizationDiagram stabilization_diagram(const std::vector<OrderPoles>& orders
         static_cast<double>(column.size()) < o.min_column_share * static_cast<double>(span) || first > latest_start)
       continue;
     PhysicalMode mode;
-    mode.freq_hz = median_of(f);
-    mode.damping = median_of(z);
+    mode.freq_hz = median(f);
+    mode.damping = median(z);
     mode.freq_spread = (*std::max_element(f.begin(), f.end()) - *std::min_element(f.begin(), f.end())) / mode.freq_hz;
     mode.damping_spread = (*std::max_element(z.begin(), z.end()) - *std::min_element(z.begin(), z.end())) / mode.damping;
     mode.first_order = first;
     mode.stable_poles = static_cast<int>(column.size());
-    if (d.with_shapes) mode.shape = top->shape;
+    if (d.with_shapes) {
+      mode.shape = top->shape;
+      mode.shape_collinearity = median(collinearity);
+      mode.random_like_poles = random_like;
+    }
+    if (2 * random_like > static_cast<int>(column.size())) {
+      d.random_shape_columns.push_back(std::move(mode));
+      continue;
+    }
     for (auto* p : column) p->mode = static_cast<int>(d.modes.size());
     d.modes.push_back(std::move(mode));
   }
 
   // The order rule: the lowest order with a candidate at every physical mode.
   if (d.modes.empty()) {
-    d.rule = "stabilization diagram: no column of stable poles (" + d.criteria() + ")";
+    d.rule = "stabilization diagram: no column of stable poles" +
+             (d.random_shape_columns.empty() ? std::string() : " with mode shapes more collinear than noise") + " (" +
+             d.criteria() + ")";
     return d;
   }
   for (const auto& op : orders) {
@@ -190,6 +227,12 @@ StabilizationDiagram stabilization_diagram(const std::vector<OrderPoles>& orders
     why << ", all present from order " << d.chosen_order;
   else
     why << ", never all present in one order";
+  if (!d.random_shape_columns.empty()) {
+    why << "; " << d.random_shape_columns.size() << " column(s) of noise-like shapes not counted (";
+    for (std::size_t k = 0; k < d.random_shape_columns.size(); ++k)
+      why << (k > 0 ? ", " : "") << format_number(d.random_shape_columns[k].freq_hz, 4) << " Hz";
+    why << ")";
+  }
   why << " (" << d.criteria() << ")";
   d.rule = why.str();
   return d;
@@ -201,22 +244,15 @@ std::string StabilizationDiagram::criteria() const {
     << format_number(100.0 * options.damping_tolerance, 3) << " %";
   if (with_shapes) s << ", MAC >= " << format_number(1.0 - options.mac_tolerance, 4);
   s << " of the order below; modes: damping <= " << format_number(options.max_damping, 3);
+  if (with_shapes && options.random_shape_level > 0.0)
+    s << ", shapes more collinear than noise's at the " << format_number(100.0 * options.random_shape_level, 3) << " % level";
   return s.str();
 }
 
-std::string StabilizationDiagram::modes_table() const {
-  std::ostringstream s;
-  char buf[160];
-  std::snprintf(buf, sizeof buf, "%4s  %12s  %10s  %12s  %12s  %6s  %7s\n", "mode", "freq [Hz]", "damping", "freq spread",
-                "damp spread", "from", "stable");
-  s << buf;
-  for (std::size_t k = 0; k < modes.size(); ++k) {
-    const PhysicalMode& m = modes[k];
-    std::snprintf(buf, sizeof buf, "%4zu  %12.6g  %10.4g  %11.3g%%  %11.3g%%  %6d  %7d\n", k + 1, m.freq_hz, m.damping,
-                  100.0 * m.freq_spread, 100.0 * m.damping_spread, m.first_order, m.stable_poles);
-    s << buf;
-  }
-  return s.str();
+std::string StabilizationDiagram::modes_table() const { return columns_table(modes, with_shapes, "mode"); }
+
+std::string StabilizationDiagram::random_shape_columns_table() const {
+  return random_shape_columns.empty() ? std::string() : columns_table(random_shape_columns, with_shapes, "column");
 }
 
 }  // namespace sysid

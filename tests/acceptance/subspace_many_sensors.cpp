@@ -19,6 +19,7 @@
 #include <string>
 
 #include "many_sensor_beam.hpp"
+#include "sanitizers.hpp"
 
 namespace test_acceptance_subspace_many_sensors {
 
@@ -107,6 +108,35 @@ TEST(ManySensorsAcceptance, StabilizationDiagramReadsEveryModeAndTheOrder) {
   // Every plotted pole carries its marks; the columns' poles are all fully stable.
   for (const auto& p : d.poles)
     if (p.mode >= 0) EXPECT_EQ(p.mark(true), 's');
+}
+
+TEST(ManySensorsAcceptance, LongHorizonsAddNoNoiseColumnToTheModes) {
+  // At horizons 30 and 40 the high orders fit the sensor noise with columns as
+  // stable as the modes' (510 and 978 Hz, 524 Hz); their shapes are random
+  // vectors, so the diagram names them and counts only the twelve modes.
+  if (test::kSanitized) GTEST_SKIP() << "two 28-output diagrams over orders 2..60; the shape test runs in the unit tests";
+  const ManySensorCase& c = many_sensor_case();
+  const Eigen::VectorXd& f_true = c.truth.modes.natural_frequencies_hz;
+  for (const int horizon : {30, 40}) {
+    N4sidOptions o;
+    o.order_rule = OrderRule::stabilization;
+    o.stabilization_order_lo = 2;
+    o.stabilization_order_hi = 60;
+    o.horizon = horizon;
+    o.refine_poles = PoleRefinementMode::never;  // the diagram is the subject here
+    const StabilizationDiagram d = n4sid(c.data, o).stabilization;
+    std::printf("horizon %d: %s\n%s%s", horizon, d.rule.c_str(), d.modes_table().c_str(), d.random_shape_columns_table().c_str());
+    ASSERT_EQ(d.modes.size(), static_cast<std::size_t>(kModes)) << "horizon " << horizon << "\n" << d.modes_table();
+    for (Eigen::Index k = 0; k < kModes; ++k) {
+      const PhysicalMode& m = d.modes[static_cast<std::size_t>(k)];
+      EXPECT_LT(std::abs(m.freq_hz - f_true(k)) / f_true(k), 0.005) << "horizon " << horizon << ", mode " << k + 1;
+    }
+    EXPECT_NEAR(d.chosen_order, 2 * kModes, 2) << d.rule;
+    EXPECT_FALSE(d.random_shape_columns.empty()) << "horizon " << horizon << ": the noise columns this case is built on";
+    for (const PhysicalMode& noise : d.random_shape_columns)
+      for (Eigen::Index k = 0; k < kModes; ++k)
+        EXPECT_GT(std::abs(noise.freq_hz - f_true(k)) / f_true(k), 0.005) << "a true mode refused at " << noise.freq_hz << " Hz";
+  }
 }
 
 }  // namespace test_acceptance_subspace_many_sensors

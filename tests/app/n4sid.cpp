@@ -242,7 +242,8 @@ TEST_F(N4sidApp, HelpHasAnExample) {
   EXPECT_NE(r.out.find("Example"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("sysid n4sid log.csv --inputs"), std::string::npos) << r.out;
   for (const char* option : {"--inputs", "--outputs", "--ts", "--nan-policy", "--method", "--order", "--max-order",
-                             "--order-rule", "--horizon", "--enforce-stability", "--hankel", "--validate", "--split", "--band-limit", "--out"})
+                             "--order-rule", "--horizon", "--enforce-stability", "--hankel", "--validate", "--split", "--band-limit",
+                             "--stabilization", "--noise-shape-level", "--out"})
     EXPECT_NE(r.out.find(option), std::string::npos) << option;
 }
 
@@ -278,6 +279,16 @@ TEST_F(N4sidApp, StabilizationDiagramChoosesTheOrderAndWritesItsPoles) {
                                     "--stabilization", bad});
   EXPECT_EQ(single.exit_code, 1) << describe(single);
   EXPECT_NE(single.err.find("--order LO:HI"), std::string::npos) << single.err;
+  EXPECT_FALSE(std::filesystem::exists(bad));
+
+  // The shape test's level belongs to the diagram: alone it is a usage error;
+  // outside 0..0.5 it is refused.
+  const CliResult alone = run_cli({"n4sid", path("log.csv"), "--inputs", "u", "--outputs", "y", "--noise-shape-level", "0"});
+  EXPECT_EQ(alone.exit_code, 1) << describe(alone);
+  EXPECT_NE(alone.err.find("--noise-shape-level requires --stabilization"), std::string::npos) << alone.err;
+  const CliResult wild = run_cli({"n4sid", path("log.csv"), "--inputs", "u", "--outputs", "y", "--order", "2:24",
+                                  "--stabilization", bad, "--noise-shape-level", "2"});
+  EXPECT_EQ(wild.exit_code, 1) << describe(wild);
   EXPECT_FALSE(std::filesystem::exists(bad));
 }
 

@@ -26,6 +26,15 @@ inline Eigen::MatrixXd randn(std::mt19937_64& rng, Eigen::Index r, Eigen::Index 
   return m;
 }
 
+/// A vector of `n` independent circular complex Gaussian entries (real and
+/// imaginary parts standard normal): a noise mode's shape.
+inline Eigen::VectorXcd random_complex_vector(std::mt19937_64& rng, Eigen::Index n) {
+  std::normal_distribution<double> normal;
+  Eigen::VectorXcd v(n);
+  for (auto& e : v) e = std::complex<double>(normal(rng), normal(rng));
+  return v;
+}
+
 /// n x cols Gaussian white noise of standard deviation sigma, seeded; column by
 /// column, the same draws as std::normal_distribution(0, sigma) on mt19937_64(seed).
 inline Eigen::MatrixXd white_noise(Eigen::Index n, Eigen::Index cols, std::uint64_t seed, double sigma = 1.0) {

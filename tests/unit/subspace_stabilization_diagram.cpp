@@ -3,12 +3,15 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <numbers>
 #include <random>
 #include <stdexcept>
 #include <vector>
+
+#include "random_matrices.hpp"
 
 namespace test_unit_subspace_stabilization_diagram {
 
@@ -24,16 +27,18 @@ cd pole(double f, double zeta) {
 }
 
 /// Orders lo..hi: every order holds the physical modes (frequency and damping
-/// jittered by `jitter`, relative; shapes fixed up to a small perturbation) and
-/// one noise pole at a random frequency with a random shape, plus conjugates.
+/// jittered by `jitter`, relative; real shapes times a complex factor, as a
+/// classically damped structure's, fixed up to a small perturbation) and one
+/// noise pole at a random frequency with a random shape, plus conjugates.
 std::vector<sysid::OrderPoles> synthetic_orders(int lo, int hi, const std::vector<std::pair<double, double>>& modes,
                                                 double jitter, Eigen::Index outputs, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(-1.0, 1.0), frequency(5.0, 450.0);
   std::vector<Eigen::VectorXcd> shapes;
   for (std::size_t k = 0; k < modes.size(); ++k) {
+    const cd factor = std::polar(1.0, std::numbers::pi * unit(rng));
     Eigen::VectorXcd s(outputs);
-    for (auto& v : s) v = cd(unit(rng), unit(rng));
+    for (auto& v : s) v = unit(rng) * factor;
     shapes.push_back(s);
   }
   std::vector<sysid::OrderPoles> out;
@@ -66,18 +71,34 @@ std::vector<sysid::OrderPoles> synthetic_orders(int lo, int hi, const std::vecto
   return out;
 }
 
-}  // namespace
-
-TEST(StabilizationDiagram, ModalAssuranceCriterion) {
-  Eigen::VectorXcd a(3), b(3);
-  a << cd(1, 0), cd(0, 2), cd(-1, 1);
-  EXPECT_NEAR(sysid::modal_assurance_criterion(a, a), 1.0, 1e-15);
-  EXPECT_NEAR(sysid::modal_assurance_criterion(a, cd(0.0, -3.0) * a), 1.0, 1e-15);  // complex scaling: the same shape
-  b << cd(0, 2), cd(1, 0), cd(0, 0);
-  b -= (a.dot(b) / a.squaredNorm()) * a;  // orthogonal to a
-  EXPECT_NEAR(sysid::modal_assurance_criterion(a, b), 0.0, 1e-15);
-  EXPECT_EQ(sysid::modal_assurance_criterion(a, Eigen::VectorXcd::Zero(3)), 0.0);
+/// Adds to every order from `from_order` on a pole pair at f Hz with the shape
+/// `shape` (up to a small perturbation): a column as stable as a mode's,
+/// whatever its shape.
+void add_persistent_column(std::vector<sysid::OrderPoles>& orders, int from_order, double f, double zeta,
+                           const Eigen::VectorXcd& shape, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (auto& op : orders) {
+    if (op.order < from_order) continue;
+    const Eigen::Index n = op.poles.size();
+    op.poles.conservativeResize(n + 2);
+    op.shapes.conservativeResize(shape.size(), n + 2);
+    op.poles(n) = pole(f * (1.0 + 1e-4 * unit(rng)), zeta);
+    op.poles(n + 1) = std::conj(op.poles(n));
+    Eigen::VectorXcd s = shape;
+    for (auto& v : s) v += 1e-3 * cd(unit(rng), unit(rng));
+    op.shapes.col(n) = s;
+    op.shapes.col(n + 1) = s.conjugate();
+  }
 }
+
+/// A shape of independent circular complex Gaussian entries: a noise mode's.
+Eigen::VectorXcd random_shape(Eigen::Index outputs, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  return sysid::test::random_complex_vector(rng, outputs);
+}
+
+}  // namespace
 
 TEST(StabilizationDiagram, PersistentModesAreColumnsAndWanderingPolesAreNot) {
   const std::vector<std::pair<double, double>> modes = {{40.0, 0.01}, {123.0, 0.02}};
@@ -123,6 +144,67 @@ TEST(StabilizationDiagram, ShapesDecideBetweenPolesOfEqualFrequency) {
   EXPECT_NE(d.rule.find("no column of stable poles"), std::string::npos) << d.rule;
 }
 
+TEST(StabilizationDiagram, AColumnWithANoiseShapeIsNotAMode) {
+  // 24 outputs: two modes and, from order 10, a column as stable as theirs whose
+  // shape is a random complex vector (what a long horizon's high orders fit to
+  // sensor noise). The shape test refuses it and names it; the modes stay.
+  constexpr Eigen::Index kOutputs = 24;
+  const std::vector<std::pair<double, double>> modes = {{40.0, 0.01}, {123.0, 0.02}};
+  auto orders = synthetic_orders(4, 30, modes, 1e-4, kOutputs, 21);
+  add_persistent_column(orders, 10, 300.0, 0.03, random_shape(kOutputs, 5), 8);
+  const sysid::StabilizationDiagram d = sysid::stabilization_diagram(orders, kTs);
+  ASSERT_EQ(d.modes.size(), 2u) << d.modes_table();
+  for (const auto& m : d.modes) {
+    EXPECT_GT(m.shape_collinearity, 0.99);
+    EXPECT_EQ(m.random_like_poles, 0);
+  }
+  ASSERT_EQ(d.random_shape_columns.size(), 1u) << d.random_shape_columns_table();
+  const sysid::PhysicalMode& noise = d.random_shape_columns[0];
+  EXPECT_NEAR(noise.freq_hz, 300.0, 0.1);
+  EXPECT_LT(noise.shape_collinearity, 0.3);
+  EXPECT_EQ(noise.random_like_poles, noise.stable_poles);
+  EXPECT_NE(d.rule.find("1 column(s) of noise-like shapes not counted (300 Hz)"), std::string::npos) << d.rule;
+  EXPECT_NE(d.criteria().find("more collinear than noise's at the 1 % level"), std::string::npos) << d.criteria();
+  const std::string table = d.random_shape_columns_table();
+  EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), 2) << table;  // header and the column
+  EXPECT_NE(table.find("MPC"), std::string::npos) << table;
+  for (const auto& p : d.poles)
+    if (std::abs(p.freq_hz - 300.0) < 1.0) EXPECT_EQ(p.mode, -1);
+
+  // With the test off, the noise column counts as a third mode.
+  sysid::StabilizationOptions off;
+  off.random_shape_level = 0.0;
+  const sysid::StabilizationDiagram all = sysid::stabilization_diagram(orders, kTs, off);
+  EXPECT_EQ(all.modes.size(), 3u) << all.modes_table();
+  EXPECT_TRUE(all.random_shape_columns.empty());
+  EXPECT_EQ(all.criteria().find("collinear"), std::string::npos) << all.criteria();
+}
+
+TEST(StabilizationDiagram, AModeSeenByVelocityAndAccelerationSensorsIsKept) {
+  // Half the sensors see the mode in quadrature (velocity against acceleration):
+  // MPC about 0 but the phase-doubled collinearity 1, so the column stays a mode.
+  constexpr Eigen::Index kOutputs = 24;
+  auto orders = synthetic_orders(4, 24, {{40.0, 0.01}}, 1e-4, kOutputs, 31);
+  Eigen::VectorXcd mixed(kOutputs);
+  for (Eigen::Index j = 0; j < kOutputs; ++j) mixed(j) = (j % 2 == 0 ? cd(1.0, 0.0) : cd(0.0, 1.0)) * (1.0 + 0.1 * j);
+  add_persistent_column(orders, 4, 200.0, 0.01, mixed, 4);
+  const sysid::StabilizationDiagram d = sysid::stabilization_diagram(orders, kTs);
+  ASSERT_EQ(d.modes.size(), 2u) << d.modes_table() << d.random_shape_columns_table();
+  EXPECT_NEAR(d.modes[1].freq_hz, 200.0, 0.1);
+  EXPECT_GT(d.modes[1].shape_collinearity, 0.99);
+  EXPECT_TRUE(d.random_shape_columns.empty());
+}
+
+TEST(StabilizationDiagram, FewOutputsCannotTellANoiseShape) {
+  // Six outputs: a random shape is too often as collinear as a mode's for the
+  // test to tell (the 1 % quantile exceeds 0.5), so no column is refused for it.
+  auto orders = synthetic_orders(4, 24, {{40.0, 0.01}}, 1e-4, 6, 41);
+  add_persistent_column(orders, 4, 300.0, 0.03, random_shape(6, 9), 10);
+  const sysid::StabilizationDiagram d = sysid::stabilization_diagram(orders, kTs);
+  EXPECT_EQ(d.modes.size(), 2u) << d.modes_table();
+  EXPECT_TRUE(d.random_shape_columns.empty());
+}
+
 TEST(StabilizationDiagram, OneOutputComparesFrequencyAndDampingOnly) {
   auto orders = synthetic_orders(2, 16, {{25.0, 0.005}}, 1e-4, 1, 13);
   for (auto& op : orders) op.shapes.resize(0, 0);
@@ -163,6 +245,10 @@ TEST(StabilizationDiagram, BadArgumentsAreRefused) {
   a.poles = Eigen::VectorXcd::Constant(2, pole(10.0, 0.01));
   a.shapes = Eigen::MatrixXcd::Ones(3, 1);
   EXPECT_THROW(sysid::stabilization_diagram({a}, kTs), std::invalid_argument);
+  a.shapes.resize(0, 0);
+  sysid::StabilizationOptions o;
+  o.random_shape_level = 1.0;
+  EXPECT_THROW(sysid::stabilization_diagram({a}, kTs, o), std::invalid_argument);
 }
 
 }  // namespace test_unit_subspace_stabilization_diagram

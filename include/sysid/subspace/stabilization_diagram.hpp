@@ -22,8 +22,7 @@
 ///    is within damping_tolerance (relative) too, and in shape when the modal
 ///    assurance criterion MAC = |phi_n^H phi_{n-1}|^2 / (|phi_n|^2 |phi_{n-1}|^2)
 ///    of the two mode shapes (phi = C v, v the eigenvector) is at least
-///    1 - mac_tolerance (R. J. Allemang, "The modal assurance criterion - twenty
-///    years of use and abuse", Sound and Vibration 37 (2003) 14-21). The
+///    1 - mac_tolerance (core/modal_assurance_criterion.hpp). The
 ///    defaults, 1 %, 5 % and 2 %, are the usual ones (Peeters et al. sec. 3.2);
 ///  - physical modes: the fully stable poles (frequency, damping and, with
 ///    several outputs, shape) sorted by frequency and grouped where neighbours lie
@@ -33,13 +32,31 @@
 ///    orders from its first stable pole to hi: a physical mode, once found, stays
 ///    found as the order grows, while a noise pole wanders; and it must start in
 ///    the lower three quarters of the orders (latest_column_start);
+///  - and, with many outputs, its mode shapes must be more real than noise: a
+///    long horizon lets the extra states of high orders fit the sensor noise
+///    with columns that are stable from order to order (28-sensor beam, orders
+///    2..60: at horizon 30 columns at 510 and 978 Hz, at 40 one at 524 Hz, beside
+///    the twelve modes), but their shapes are random vectors, MPC 0.01-0.09,
+///    where the structure's modes have 0.96-1.00. A pole whose
+///    quadrature_tolerant_collinearity (core/modal_phase_collinearity.hpp) is
+///    below the value a random shape exceeds with probability random_shape_level
+///    is random-like; a column with more than half its poles random-like is not
+///    a mode and is listed in random_shape_columns. The test needs a shape
+///    spread over enough outputs to tell (that value <= 0.5: about 17 or more
+///    effective outputs at 1 %); with fewer it is not made. Strongly
+///    non-proportional damping makes physical modes complex too (MPC down to
+///    0.1 at 25 % damping from local dashpots): such modes can be refused, and
+///    the report names them (random_shape_level = 0 turns the test off);
 ///  - the order rule: the lowest order whose model has a candidate pole within
 ///    twice the frequency tolerance of every physical mode. Real poles are not
 ///    modes; a plant with real poles needs them added by hand (--order N).
 ///
 /// Preconditions (std::invalid_argument): Ts > 0; orders consecutive and
 /// increasing; each OrderPoles' shapes have one column per pole (or none).
+#include <sysid/core/modal_assurance_criterion.hpp>
+
 #include <Eigen/Dense>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -65,6 +82,10 @@ struct StabilizationOptions {
   /// states fit (on the 28-sensor beam at horizon 16, columns at 1.30 and 1.75 kHz
   /// from orders 53 and 55; the structure's twelve modes appear by order 25).
   double latest_column_start = 0.75;
+  /// A pole's shape is random-like when a random shape of as many effective
+  /// outputs is at least as collinear with this probability or less (file
+  /// comment); 0 turns the shape test off.
+  double random_shape_level = 0.01;
 };
 
 /// One mode candidate of one order.
@@ -94,6 +115,9 @@ struct PhysicalMode {
   int first_order = 0;                 ///< lowest order with a stable pole in the column
   int stable_poles = 0;                ///< stable poles in the column
   Eigen::VectorXcd shape;              ///< the highest order's shape in the column (unit norm; empty for one output)
+  /// Median quadrature_tolerant_collinearity of the column's shapes (1: real); NaN for one output.
+  double shape_collinearity = std::numeric_limits<double>::quiet_NaN();
+  int random_like_poles = 0;  ///< poles whose shape is no more collinear than a random one's (file comment)
 };
 
 struct StabilizationDiagram {
@@ -102,18 +126,21 @@ struct StabilizationDiagram {
   bool with_shapes = false;  ///< several outputs: shapes compared by MAC
   std::vector<StabilizationPole> poles;  ///< every candidate of every order, by order then frequency
   std::vector<PhysicalMode> modes;       ///< by frequency
+  /// Columns that pass every other test but whose shapes are random-like: noise
+  /// that the high orders fit, not modes (file comment); by frequency.
+  std::vector<PhysicalMode> random_shape_columns;
   /// The rule's order (file comment); 0 when no physical mode was found.
   int chosen_order = 0;
   std::string rule;  ///< how chosen_order came about, in words
 
-  /// The physical modes as a table (frequency, damping, their spreads, first order, stable poles).
+  /// The physical modes as a table (frequency, damping, their spreads, first
+  /// order, stable poles and, with several outputs, the shapes' collinearity).
   std::string modes_table() const;
+  /// random_shape_columns as the same table ("" when there are none).
+  std::string random_shape_columns_table() const;
   /// The tolerances in words, for reports and plots.
   std::string criteria() const;
 };
-
-/// Modal assurance criterion |a^H b|^2 / (|a|^2 |b|^2) (1: the same shape); 0 if either is zero.
-double modal_assurance_criterion(const Eigen::VectorXcd& a, const Eigen::VectorXcd& b);
 
 /// Purpose: the diagram of `orders` (file comment), poles at sample time Ts.
 StabilizationDiagram stabilization_diagram(const std::vector<OrderPoles>& orders, double Ts,
