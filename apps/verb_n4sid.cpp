@@ -147,7 +147,7 @@ void write_stabilization(const std::string& path, const StabilizationDiagram& d,
     }
   };
   add_lines(d.modes, "physical modes", 6);
-  add_lines(d.random_shape_columns, "noise-like shapes (not modes)", 7);
+  add_lines(d.noise_columns, "noise columns (not modes)", 7);
   PlotFigure fig;
   fig.title = "stabilization diagram of " + log_path + ": " + std::to_string(d.modes.size()) + " physical modes" +
               (d.chosen_order > 0 ? ", all present from order " + std::to_string(d.chosen_order) : std::string());
@@ -299,10 +299,10 @@ N4sidOutcome identify_n4sid(const N4sidArgs& a, bool keep_estimation) {
       report << "no physical mode: no column of stable poles\n";
     else
       report << "physical modes (columns of stable poles):\n" << d.modes_table();
-    if (!d.random_shape_columns.empty())
-      report << "not modes: columns whose shapes are no more collinear than noise's (MPC; the high orders fit the sensor "
-                "noise; --noise-shape-level 0 counts them):\n"
-             << d.random_shape_columns_table();
+    if (!d.noise_columns.empty())
+      report << "not modes: columns of noise that the high orders fit (level: the poles' singular-value weight over "
+                "the wandering poles' at the same orders; MPC: shape collinearity, --noise-shape-level 0 does not test it):\n"
+             << d.noise_columns_table();
     report << "\n";
     if (validation) {
       CompareOptions co;

@@ -32,6 +32,7 @@ std::vector<StabilizationPole> candidates_of(const OrderPoles& op, double Ts, do
     p.order = op.order;
     p.freq_hz = wn / (2.0 * std::numbers::pi);
     p.damping = damping;
+    if (op.levels.size() == op.poles.size()) p.level = op.levels(k);
     if (op.shapes.cols() == op.poles.size() && op.shapes.rows() > 0) {
       p.shape = op.shapes.col(k);
       const double norm = p.shape.norm();
@@ -111,25 +112,38 @@ bool random_like_shape(const Eigen::VectorXcd& shape, double level) {
   return quantile <= 0.5 && quadrature_tolerant_collinearity(shape) < quantile;
 }
 
-/// The table of modes_table() for any list of columns, the first heading `label`.
-std::string columns_table(const std::vector<PhysicalMode>& columns, bool with_shapes, const char* label) {
+/// The table of modes_table() for any list of columns, the first heading
+/// `label`; with_reasons: each row ends with the column's noise_reason.
+std::string columns_table(const std::vector<PhysicalMode>& columns, bool with_shapes, const char* label, bool with_reasons) {
   std::ostringstream s;
   char buf[200];
-  std::snprintf(buf, sizeof buf, "%6s  %12s  %10s  %12s  %12s  %6s  %7s", label, "freq [Hz]", "damping", "freq spread",
-                "damp spread", "from", "stable");
-  s << buf << (with_shapes ? "      MPC\n" : "\n");
+  std::snprintf(buf, sizeof buf, "%6s  %12s  %10s  %12s  %12s  %6s  %7s  %9s", label, "freq [Hz]", "damping", "freq spread",
+                "damp spread", "from", "stable", "level");
+  s << buf << (with_shapes ? "      MPC" : "") << (with_reasons ? "  why not a mode" : "") << "\n";
   for (std::size_t k = 0; k < columns.size(); ++k) {
     const PhysicalMode& m = columns[k];
-    std::snprintf(buf, sizeof buf, "%6zu  %12.6g  %10.4g  %11.3g%%  %11.3g%%  %6d  %7d", k + 1, m.freq_hz, m.damping,
-                  100.0 * m.freq_spread, 100.0 * m.damping_spread, m.first_order, m.stable_poles);
+    std::snprintf(buf, sizeof buf, "%6zu  %12.6g  %10.4g  %11.3g%%  %11.3g%%  %6d  %7d  %8.3gx", k + 1, m.freq_hz, m.damping,
+                  100.0 * m.freq_spread, 100.0 * m.damping_spread, m.first_order, m.stable_poles, m.level_ratio);
     s << buf;
     if (with_shapes) {
       std::snprintf(buf, sizeof buf, "  %7.3f", m.shape_collinearity);
       s << buf;
     }
+    if (with_reasons) s << "  " << m.noise_reason;
     s << "\n";
   }
   return s.str();
+}
+
+/// Per order (index order - lo): the median level of the candidates that are
+/// not fully stable there (the wandering poles), NaN where there are none.
+std::vector<double> wandering_levels(const std::vector<StabilizationPole>& poles, int lo, int hi, bool with_shapes) {
+  std::vector<std::vector<double>> levels(static_cast<std::size_t>(hi - lo + 1));
+  for (const auto& p : poles)
+    if (p.mark(with_shapes) != 's' && std::isfinite(p.level)) levels[static_cast<std::size_t>(p.order - lo)].push_back(p.level);
+  std::vector<double> out;
+  for (auto& l : levels) out.push_back(l.empty() ? std::numeric_limits<double>::quiet_NaN() : median(std::move(l)));
+  return out;
 }
 
 }  // namespace
@@ -144,6 +158,7 @@ StabilizationDiagram stabilization_diagram(const std::vector<OrderPoles>& orders
     throw std::invalid_argument("stabilization diagram: need positive tolerances and max_damping");
   if (!(o.random_shape_level >= 0.0 && o.random_shape_level < 1.0))
     throw std::invalid_argument("stabilization diagram: need 0 <= random_shape_level < 1");
+  if (!(o.min_level_ratio >= 0.0)) throw std::invalid_argument("stabilization diagram: need min_level_ratio >= 0");
   StabilizationDiagram d;
   d.options = o;
   d.order_lo = orders.front().order;
@@ -151,6 +166,9 @@ StabilizationDiagram stabilization_diagram(const std::vector<OrderPoles>& orders
   d.with_shapes = orders.front().shapes.rows() > 1;
   std::vector<std::vector<StabilizationPole>> by_order;
   for (const auto& op : orders) {
+    if (op.levels.size() > 0 && op.levels.size() != op.poles.size())
+      throw std::invalid_argument("stabilization diagram: order " + std::to_string(op.order) + " has " +
+                                  std::to_string(op.levels.size()) + " levels for " + std::to_string(op.poles.size()) + " poles");
     if (op.shapes.size() > 0 && op.shapes.cols() != op.poles.size())
       throw std::invalid_argument("stabilization diagram: order " + std::to_string(op.order) + " has " +
                                   std::to_string(op.shapes.cols()) + " shapes for " + std::to_string(op.poles.size()) + " poles");
@@ -161,13 +179,16 @@ StabilizationDiagram stabilization_diagram(const std::vector<OrderPoles>& orders
   for (auto& order : by_order)
     for (auto& p : order) d.poles.push_back(std::move(p));
 
-  // Physical modes: the columns that persist.
+  // Physical modes: the columns that persist, above the noise.
+  const std::vector<double> reference = wandering_levels(d.poles, d.order_lo, d.order_hi, d.with_shapes);
   for (auto& column : stable_columns(d.poles, d.with_shapes, o)) {
     int first = std::numeric_limits<int>::max();
     const StabilizationPole* top = nullptr;
-    std::vector<double> f, z, collinearity;
+    std::vector<double> f, z, collinearity, level_ratios;
     int random_like = 0;
     for (const auto* p : column) {
+      const double wandering = reference[static_cast<std::size_t>(p->order - d.order_lo)];
+      if (std::isfinite(p->level) && wandering > 0.0) level_ratios.push_back(p->level / wandering);
       first = std::min(first, p->order);
       if (top == nullptr || p->order > top->order) top = p;
       f.push_back(p->freq_hz);
@@ -194,8 +215,14 @@ StabilizationDiagram stabilization_diagram(const std::vector<OrderPoles>& orders
       mode.shape_collinearity = median(collinearity);
       mode.random_like_poles = random_like;
     }
-    if (2 * random_like > static_cast<int>(column.size())) {
-      d.random_shape_columns.push_back(std::move(mode));
+    if (!level_ratios.empty()) mode.level_ratio = median(level_ratios);
+    if (o.min_level_ratio > 0.0 && mode.level_ratio < o.min_level_ratio)
+      mode.noise_reason = "level " + format_number(mode.level_ratio, 3) + " x the wandering poles' (< " +
+                          format_number(o.min_level_ratio, 3) + ")";
+    else if (2 * random_like > static_cast<int>(column.size()))
+      mode.noise_reason = "shapes no more collinear than noise's (MPC " + format_number(mode.shape_collinearity, 2) + ")";
+    if (!mode.noise_reason.empty()) {
+      d.noise_columns.push_back(std::move(mode));
       continue;
     }
     for (auto* p : column) p->mode = static_cast<int>(d.modes.size());
@@ -205,8 +232,7 @@ StabilizationDiagram stabilization_diagram(const std::vector<OrderPoles>& orders
   // The order rule: the lowest order with a candidate at every physical mode.
   if (d.modes.empty()) {
     d.rule = "stabilization diagram: no column of stable poles" +
-             (d.random_shape_columns.empty() ? std::string() : " with mode shapes more collinear than noise") + " (" +
-             d.criteria() + ")";
+             (d.noise_columns.empty() ? std::string() : " above the noise") + " (" + d.criteria() + ")";
     return d;
   }
   for (const auto& op : orders) {
@@ -227,10 +253,10 @@ StabilizationDiagram stabilization_diagram(const std::vector<OrderPoles>& orders
     why << ", all present from order " << d.chosen_order;
   else
     why << ", never all present in one order";
-  if (!d.random_shape_columns.empty()) {
-    why << "; " << d.random_shape_columns.size() << " column(s) of noise-like shapes not counted (";
-    for (std::size_t k = 0; k < d.random_shape_columns.size(); ++k)
-      why << (k > 0 ? ", " : "") << format_number(d.random_shape_columns[k].freq_hz, 4) << " Hz";
+  if (!d.noise_columns.empty()) {
+    why << "; " << d.noise_columns.size() << " column(s) of noise not counted (";
+    for (std::size_t k = 0; k < d.noise_columns.size(); ++k)
+      why << (k > 0 ? ", " : "") << format_number(d.noise_columns[k].freq_hz, 4) << " Hz";
     why << ")";
   }
   why << " (" << d.criteria() << ")";
@@ -244,15 +270,17 @@ std::string StabilizationDiagram::criteria() const {
     << format_number(100.0 * options.damping_tolerance, 3) << " %";
   if (with_shapes) s << ", MAC >= " << format_number(1.0 - options.mac_tolerance, 4);
   s << " of the order below; modes: damping <= " << format_number(options.max_damping, 3);
+  if (options.min_level_ratio > 0.0)
+    s << ", level >= " << format_number(options.min_level_ratio, 3) << " x the wandering poles'";
   if (with_shapes && options.random_shape_level > 0.0)
     s << ", shapes more collinear than noise's at the " << format_number(100.0 * options.random_shape_level, 3) << " % level";
   return s.str();
 }
 
-std::string StabilizationDiagram::modes_table() const { return columns_table(modes, with_shapes, "mode"); }
+std::string StabilizationDiagram::modes_table() const { return columns_table(modes, with_shapes, "mode", false); }
 
-std::string StabilizationDiagram::random_shape_columns_table() const {
-  return random_shape_columns.empty() ? std::string() : columns_table(random_shape_columns, with_shapes, "column");
+std::string StabilizationDiagram::noise_columns_table() const {
+  return noise_columns.empty() ? std::string() : columns_table(noise_columns, with_shapes, "column", true);
 }
 
 }  // namespace sysid

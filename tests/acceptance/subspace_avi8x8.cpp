@@ -11,6 +11,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <numbers>
+#include <vector>
+
 namespace test_acceptance_subspace_avi8x8 {
 
 using namespace sysid;
@@ -66,6 +72,32 @@ TEST(Avi8x8Acceptance, FrequencyResponseAndValidationFit) {
 TEST(Avi8x8Acceptance, AutomaticOrderIsSixteen) {
   const N4sidResult r = n4sid(load("avi8x8.csv"), {});
   EXPECT_EQ(r.order, 16) << r.order_rule;
+}
+
+TEST(Avi8x8Acceptance, StabilizationDiagramCountsNoNoiseColumn) {
+  // Orders 2..40 at the automatic horizon: the eight modes stand at 130-1 600 x
+  // the wandering poles' level; a column at 444 Hz persists from order 27 at
+  // ~2 x (noise that the high orders fit; with eight outputs the shape test
+  // cannot tell it) and is named, not counted: the order stays the true 16.
+  const StateSpace truth = read_model_json(kData + "/avi8x8_true.json").model;
+  N4sidOptions o;
+  o.order_rule = OrderRule::stabilization;
+  o.stabilization_order_lo = 2;
+  o.stabilization_order_hi = 40;
+  const N4sidResult r = n4sid(load("avi8x8.csv"), o);
+  const StabilizationDiagram& d = r.stabilization;
+  std::cout << d.rule << "\n" << d.modes_table() << d.noise_columns_table();
+  EXPECT_EQ(r.order, 16) << d.rule;
+  const Eigen::VectorXcd true_poles = truth.A.eigenvalues();
+  std::vector<double> true_hz;
+  for (const auto z : true_poles)
+    if (z.imag() > 0.0) true_hz.push_back(std::abs(std::log(z)) / truth.Ts / (2.0 * std::numbers::pi));
+  std::sort(true_hz.begin(), true_hz.end());
+  ASSERT_EQ(d.modes.size(), true_hz.size()) << d.modes_table() << d.noise_columns_table();
+  for (std::size_t k = 0; k < true_hz.size(); ++k)
+    EXPECT_NEAR(d.modes[k].freq_hz, true_hz[k], 0.005 * true_hz[k]) << "mode " << k + 1;
+  for (const PhysicalMode& noise : d.noise_columns)
+    for (const double f : true_hz) EXPECT_GT(std::abs(noise.freq_hz - f), 0.005 * f) << "a true mode refused at " << f << " Hz";
 }
 
 }  // namespace test_acceptance_subspace_avi8x8

@@ -158,14 +158,15 @@ TEST(StabilizationDiagram, AColumnWithANoiseShapeIsNotAMode) {
     EXPECT_GT(m.shape_collinearity, 0.99);
     EXPECT_EQ(m.random_like_poles, 0);
   }
-  ASSERT_EQ(d.random_shape_columns.size(), 1u) << d.random_shape_columns_table();
-  const sysid::PhysicalMode& noise = d.random_shape_columns[0];
+  ASSERT_EQ(d.noise_columns.size(), 1u) << d.noise_columns_table();
+  const sysid::PhysicalMode& noise = d.noise_columns[0];
   EXPECT_NEAR(noise.freq_hz, 300.0, 0.1);
   EXPECT_LT(noise.shape_collinearity, 0.3);
   EXPECT_EQ(noise.random_like_poles, noise.stable_poles);
-  EXPECT_NE(d.rule.find("1 column(s) of noise-like shapes not counted (300 Hz)"), std::string::npos) << d.rule;
+  EXPECT_NE(d.rule.find("1 column(s) of noise not counted (300 Hz)"), std::string::npos) << d.rule;
+  EXPECT_NE(noise.noise_reason.find("shapes no more collinear than noise's"), std::string::npos) << noise.noise_reason;
   EXPECT_NE(d.criteria().find("more collinear than noise's at the 1 % level"), std::string::npos) << d.criteria();
-  const std::string table = d.random_shape_columns_table();
+  const std::string table = d.noise_columns_table();
   EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), 2) << table;  // header and the column
   EXPECT_NE(table.find("MPC"), std::string::npos) << table;
   for (const auto& p : d.poles)
@@ -176,8 +177,48 @@ TEST(StabilizationDiagram, AColumnWithANoiseShapeIsNotAMode) {
   off.random_shape_level = 0.0;
   const sysid::StabilizationDiagram all = sysid::stabilization_diagram(orders, kTs, off);
   EXPECT_EQ(all.modes.size(), 3u) << all.modes_table();
-  EXPECT_TRUE(all.random_shape_columns.empty());
+  EXPECT_TRUE(all.noise_columns.empty());
   EXPECT_EQ(all.criteria().find("collinear"), std::string::npos) << all.criteria();
+}
+
+TEST(StabilizationDiagram, AColumnAtTheNoiseLevelIsNotAMode) {
+  // One output (no shapes): two modes at level 100, from order 10 a column as
+  // stable as theirs at level 1.5, and the wandering noise poles at level 1.
+  const std::vector<std::pair<double, double>> modes = {{40.0, 0.01}, {123.0, 0.02}};
+  auto orders = synthetic_orders(4, 30, modes, 1e-4, 1, 51);
+  add_persistent_column(orders, 10, 300.0, 0.03, Eigen::VectorXcd::Ones(1), 12);
+  for (auto& op : orders) {
+    op.shapes.resize(0, 0);
+    op.levels.resize(op.poles.size());
+    for (Eigen::Index k = 0; k < op.poles.size(); ++k) {
+      const double f = std::abs(std::log(op.poles(k))) / (2.0 * std::numbers::pi * kTs);
+      op.levels(k) = std::abs(f - 300.0) < 1.0 ? 1.5 : (std::abs(f - 40.0) < 1.0 || std::abs(f - 123.0) < 1.0) ? 100.0 : 1.0;
+    }
+  }
+  const sysid::StabilizationDiagram d = sysid::stabilization_diagram(orders, kTs);
+  ASSERT_EQ(d.modes.size(), 2u) << d.modes_table() << d.noise_columns_table();
+  for (const auto& m : d.modes) EXPECT_NEAR(m.level_ratio, 100.0, 1e-9);
+  ASSERT_EQ(d.noise_columns.size(), 1u) << d.noise_columns_table();
+  EXPECT_NEAR(d.noise_columns[0].freq_hz, 300.0, 0.1);
+  EXPECT_NEAR(d.noise_columns[0].level_ratio, 1.5, 1e-9);
+  EXPECT_NE(d.noise_columns[0].noise_reason.find("level 1.5 x the wandering poles' (< 3)"), std::string::npos)
+      << d.noise_columns[0].noise_reason;
+  EXPECT_NE(d.noise_columns_table().find("why not a mode"), std::string::npos) << d.noise_columns_table();
+  EXPECT_NE(d.rule.find("1 column(s) of noise not counted (300 Hz)"), std::string::npos) << d.rule;
+  EXPECT_NE(d.criteria().find("level >= 3 x the wandering poles'"), std::string::npos) << d.criteria();
+
+  // With the test off the column counts; a column at 3.5 x passes.
+  sysid::StabilizationOptions off;
+  off.min_level_ratio = 0.0;
+  EXPECT_EQ(sysid::stabilization_diagram(orders, kTs, off).modes.size(), 3u);
+  for (auto& op : orders)
+    for (auto& v : op.levels)
+      if (v == 1.5) v = 3.5;
+  EXPECT_EQ(sysid::stabilization_diagram(orders, kTs).modes.size(), 3u);
+
+  // Levels must match the poles.
+  orders[2].levels.resize(1);
+  EXPECT_THROW(sysid::stabilization_diagram(orders, kTs), std::invalid_argument);
 }
 
 TEST(StabilizationDiagram, AModeSeenByVelocityAndAccelerationSensorsIsKept) {
@@ -189,10 +230,10 @@ TEST(StabilizationDiagram, AModeSeenByVelocityAndAccelerationSensorsIsKept) {
   for (Eigen::Index j = 0; j < kOutputs; ++j) mixed(j) = (j % 2 == 0 ? cd(1.0, 0.0) : cd(0.0, 1.0)) * (1.0 + 0.1 * j);
   add_persistent_column(orders, 4, 200.0, 0.01, mixed, 4);
   const sysid::StabilizationDiagram d = sysid::stabilization_diagram(orders, kTs);
-  ASSERT_EQ(d.modes.size(), 2u) << d.modes_table() << d.random_shape_columns_table();
+  ASSERT_EQ(d.modes.size(), 2u) << d.modes_table() << d.noise_columns_table();
   EXPECT_NEAR(d.modes[1].freq_hz, 200.0, 0.1);
   EXPECT_GT(d.modes[1].shape_collinearity, 0.99);
-  EXPECT_TRUE(d.random_shape_columns.empty());
+  EXPECT_TRUE(d.noise_columns.empty());
 }
 
 TEST(StabilizationDiagram, FewOutputsCannotTellANoiseShape) {
@@ -202,7 +243,7 @@ TEST(StabilizationDiagram, FewOutputsCannotTellANoiseShape) {
   add_persistent_column(orders, 4, 300.0, 0.03, random_shape(6, 9), 10);
   const sysid::StabilizationDiagram d = sysid::stabilization_diagram(orders, kTs);
   EXPECT_EQ(d.modes.size(), 2u) << d.modes_table();
-  EXPECT_TRUE(d.random_shape_columns.empty());
+  EXPECT_TRUE(d.noise_columns.empty());
 }
 
 TEST(StabilizationDiagram, OneOutputComparesFrequencyAndDampingOnly) {
@@ -248,6 +289,9 @@ TEST(StabilizationDiagram, BadArgumentsAreRefused) {
   a.shapes.resize(0, 0);
   sysid::StabilizationOptions o;
   o.random_shape_level = 1.0;
+  EXPECT_THROW(sysid::stabilization_diagram({a}, kTs, o), std::invalid_argument);
+  o.random_shape_level = 0.01;
+  o.min_level_ratio = -1.0;
   EXPECT_THROW(sysid::stabilization_diagram({a}, kTs, o), std::invalid_argument);
 }
 
