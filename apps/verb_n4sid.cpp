@@ -49,6 +49,7 @@ struct N4sidArgs {
   std::string plot;
   std::string stabilization;
   double noise_shape_level = StabilizationOptions{}.random_shape_level;
+  double min_level_ratio = StabilizationOptions{}.min_level_ratio;
 };
 
 /// The singular values (and, when present, the canonical correlations of the SVC
@@ -290,6 +291,7 @@ N4sidOutcome identify_n4sid(const N4sidArgs& a, bool keep_estimation) {
     options.order_rule = OrderRule::stabilization;
     options.stabilization_order_lo = order.lo;
     options.stabilization.random_shape_level = a.noise_shape_level;
+    options.stabilization.min_level_ratio = a.min_level_ratio;
     options.stabilization_order_hi = order.hi;
     res = n4sid(std::move(estimation), options);
     const StabilizationDiagram& d = res.stabilization;
@@ -301,7 +303,8 @@ N4sidOutcome identify_n4sid(const N4sidArgs& a, bool keep_estimation) {
       report << "physical modes (columns of stable poles):\n" << d.modes_table();
     if (!d.noise_columns.empty())
       report << "not modes: columns of noise that the high orders fit (level: the poles' singular-value weight over "
-                "the wandering poles' at the same orders; MPC: shape collinearity, --noise-shape-level 0 does not test it):\n"
+                "the wandering poles' at the same orders, --min-level-ratio 0 does not test it; MPC: shape collinearity, "
+                "--noise-shape-level 0 does not test it):\n"
              << d.noise_columns_table();
     report << "\n";
     if (validation) {
@@ -502,6 +505,13 @@ Verb register_n4sid(CLI::App& app) {
             return "expected a file name ending in .csv, .svg or .png, found '" + s + "'";
           },
           "FILE.csv|.svg|.png"));
+  cmd->add_option("--min-level-ratio", args->min_level_ratio,
+                  "with --stabilization: a column whose poles' level (the compression's singular values weighted by "
+                  "their eigenvectors) is below this many times that of the poles that wander at the same orders is "
+                  "named as noise and not counted as a mode; 0 counts every column")
+      ->check(CLI::Range(0.0, 1e6))
+      ->capture_default_str()
+      ->needs(stabilization);
   cmd->add_option("--noise-shape-level", args->noise_shape_level,
                   "with --stabilization and many outputs (about 17 or more): a column whose mode shapes are no more "
                   "collinear (MPC) than random noise's at this level is named and not counted as a mode; 0 counts every "

@@ -363,7 +363,10 @@ inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& option
     res.order_rule = "given by the user";
   } else if (options.order_rule == OrderRule::stabilization) {
     if (res.stabilization.chosen_order < 1)
-      throw NumericalError("n4sid: " + res.stabilization.rule + "; choose another --order-rule or give --order N");
+      throw NumericalError("n4sid: " + res.stabilization.rule + "; choose another --order-rule or give --order N" +
+                           (res.stabilization.noise_columns.empty() ? std::string()
+                                                                    : " (--min-level-ratio 0 and --noise-shape-level 0 count "
+                                                                      "the columns named as noise)"));
     res.order = res.stabilization.chosen_order;
     res.order_rule = res.stabilization.rule;
   } else {

@@ -231,8 +231,14 @@ StabilizationDiagram stabilization_diagram(const std::vector<OrderPoles>& orders
 
   // The order rule: the lowest order with a candidate at every physical mode.
   if (d.modes.empty()) {
-    d.rule = "stabilization diagram: no column of stable poles" +
-             (d.noise_columns.empty() ? std::string() : " above the noise") + " (" + d.criteria() + ")";
+    d.rule = "stabilization diagram: no column of stable poles";
+    if (!d.noise_columns.empty()) {
+      d.rule += " above the noise (";
+      for (std::size_t k = 0; k < d.noise_columns.size(); ++k)
+        d.rule += (k > 0 ? "; " : "") + format_number(d.noise_columns[k].freq_hz, 4) + " Hz: " + d.noise_columns[k].noise_reason;
+      d.rule += ")";
+    }
+    d.rule += " (" + d.criteria() + ")";
     return d;
   }
   for (const auto& op : orders) {
