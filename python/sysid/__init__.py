@@ -58,6 +58,7 @@ from ._sysid import (
     read_model,
     reduce,
     resid,
+    stabilization_diagram,
 )
 
 
@@ -75,4 +76,5 @@ __all__ = [
     "DataError", "FemModel", "Markov", "Model", "NumericalError", "__version__", "ar", "arma", "armax", "arx", "check", "chirp", "compare",
     "cva", "diagnose", "era", "family", "fem_frf", "fem_modes", "fem_reduce", "filter", "fit_percent", "frf", "hsv", "lms", "model_from_json", "moesp", "multisine", "n4sid",
     "oe", "okid", "prbs", "psd", "read_family", "read_fem", "read_log", "read_markov", "read_model", "reduce", "resid",
+    "stabilization_diagram",
 ]

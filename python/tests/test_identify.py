@@ -125,3 +125,41 @@ def test_prediction_error_failures_are_numerical_errors(par2):
     assert model.provenance["converged"] is False
     with pytest.raises(ValueError, match="one per input"):
         sysid.arx(u, y, Ts, na=2, nb=[2, 2])
+
+
+def test_the_stabilization_diagram_equals_the_command_line(data_dir, sysid_cli, tmp_path):
+    # The 8x8 example log over orders 2..40 (issue 34 item 2): the same poles and
+    # marks as the command line's CSV, the same model file, and the 444 Hz column
+    # that stands at the noise's level named with its reason, not counted.
+    channels = [f"u{k}" for k in range(1, 9)], [f"y{k}" for k in range(1, 9)]
+    u, y, Ts = sysid.read_log(str(data_dir / "avi8x8.csv"), *channels)
+    table = tmp_path / "stab.csv"
+    cli = cli_model(sysid_cli, tmp_path, "n4sid", data_dir / "avi8x8.csv", "--inputs", ",".join(channels[0]),
+                    "--outputs", ",".join(channels[1]), "--order", "2:40", "--stabilization", table)
+    diagram, model = sysid.stabilization_diagram(u, y, Ts, orders=(2, 40), inputs=channels[0], outputs=channels[1])
+    assert without_data(model.to_json()) == without_data(cli)
+    rows = np.loadtxt(table, delimiter=",", skiprows=1)
+    header = table.read_text().splitlines()[0].split(",")
+    poles = diagram["poles"]
+    for name in ("order", "freq_hz", "damping", "stable_frequency", "stable_damping", "stable_shape", "mode"):
+        np.testing.assert_array_equal(rows[:, header.index(name)], np.asarray(poles[name], dtype=float), err_msg=name)
+    assert poles["stable_shape"].dtype == bool
+    assert diagram["chosen_order"] == 16 == model.A.shape[0]
+    assert len(diagram["modes"]) == 8
+    assert all(m["level_ratio"] > 100 and m["shape"].shape == (8,) for m in diagram["modes"])
+    [noise] = diagram["noise_columns"]
+    assert abs(noise["freq_hz"] - 443.8) < 1.0 and noise["level_ratio"] < 3
+    assert "wandering poles'" in noise["reason"]
+    # The level test off: the noise column counts, as with --min-level-ratio 0.
+    everything, _ = sysid.stabilization_diagram(u, y, Ts, orders=(2, 40), min_level_ratio=0)
+    assert len(everything["modes"]) == 9 and not everything["noise_columns"]
+
+
+def test_the_stabilization_diagram_refuses_bad_options(par2):
+    u, y, Ts = par2
+    with pytest.raises(ValueError, match="orders"):
+        sysid.stabilization_diagram(u, y, Ts, orders=(10, 4))
+    with pytest.raises(ValueError, match="min_level_ratio"):
+        sysid.stabilization_diagram(u, y, Ts, orders=(2, 20), min_level_ratio=-1)
+    with pytest.raises(ValueError, match="needs the inputs"):
+        sysid.stabilization_diagram(None, y, Ts, orders=(2, 20))
