@@ -136,11 +136,13 @@ std::string columns_table(const std::vector<PhysicalMode>& columns, bool with_sh
 }
 
 /// Per order (index order - lo): the median level of the candidates that are
-/// not fully stable there (the wandering poles), NaN where there are none.
-std::vector<double> wandering_levels(const std::vector<StabilizationPole>& poles, int lo, int hi, bool with_shapes) {
+/// not stable in frequency there (new at that order: the wandering poles), NaN
+/// where there are none. Poles stable in frequency but not in damping or shape
+/// are left out: they are often modes the data hold less firmly.
+std::vector<double> wandering_levels(const std::vector<StabilizationPole>& poles, int lo, int hi) {
   std::vector<std::vector<double>> levels(static_cast<std::size_t>(hi - lo + 1));
   for (const auto& p : poles)
-    if (p.mark(with_shapes) != 's' && std::isfinite(p.level)) levels[static_cast<std::size_t>(p.order - lo)].push_back(p.level);
+    if (!p.stable_frequency && std::isfinite(p.level)) levels[static_cast<std::size_t>(p.order - lo)].push_back(p.level);
   std::vector<double> out;
   for (auto& l : levels) out.push_back(l.empty() ? std::numeric_limits<double>::quiet_NaN() : median(std::move(l)));
   return out;
@@ -180,7 +182,7 @@ StabilizationDiagram stabilization_diagram(const std::vector<OrderPoles>& orders
     for (auto& p : order) d.poles.push_back(std::move(p));
 
   // Physical modes: the columns that persist, above the noise.
-  const std::vector<double> reference = wandering_levels(d.poles, d.order_lo, d.order_hi, d.with_shapes);
+  const std::vector<double> reference = wandering_levels(d.poles, d.order_lo, d.order_hi);
   for (auto& column : stable_columns(d.poles, d.with_shapes, o)) {
     int first = std::numeric_limits<int>::max();
     const StabilizationPole* top = nullptr;
