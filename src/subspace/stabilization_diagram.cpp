@@ -135,17 +135,57 @@ std::string columns_table(const std::vector<PhysicalMode>& columns, bool with_sh
   return s.str();
 }
 
-/// Per order (index order - lo): the median level of the candidates that are
-/// not stable in frequency there (new at that order: the wandering poles), NaN
-/// where there are none. Poles stable in frequency but not in damping or shape
-/// are left out: they are often modes the data hold less firmly.
-std::vector<double> wandering_levels(const std::vector<StabilizationPole>& poles, int lo, int hi) {
+/// Per order (index order - lo): the median level of the wandering poles there,
+/// NaN where there are none. A wandering pole is new at its order (not stable
+/// in frequency) and lies in no column's band (its frequencies widened by twice
+/// the frequency tolerance): a mode's first pole, or one that drops out of its
+/// column for an order, is not noise. Poles stable in frequency but not in
+/// damping or shape are left out too: often modes the data hold less firmly.
+std::vector<double> wandering_levels(const std::vector<StabilizationPole>& poles, int lo, int hi,
+                                     const std::vector<std::vector<StabilizationPole*>>& columns, double tolerance) {
+  std::vector<std::pair<double, double>> bands;
+  for (const auto& column : columns) {
+    const auto [low, high] = std::minmax_element(column.begin(), column.end(),
+                                                 [](const auto* a, const auto* b) { return a->freq_hz < b->freq_hz; });
+    bands.emplace_back((*low)->freq_hz * (1.0 - 2.0 * tolerance), (*high)->freq_hz * (1.0 + 2.0 * tolerance));
+  }
   std::vector<std::vector<double>> levels(static_cast<std::size_t>(hi - lo + 1));
-  for (const auto& p : poles)
-    if (!p.stable_frequency && std::isfinite(p.level)) levels[static_cast<std::size_t>(p.order - lo)].push_back(p.level);
+  for (const auto& p : poles) {
+    if (p.stable_frequency || !std::isfinite(p.level)) continue;
+    const bool in_band = std::any_of(bands.begin(), bands.end(),
+                                     [&](const auto& b) { return p.freq_hz >= b.first && p.freq_hz <= b.second; });
+    if (!in_band) levels[static_cast<std::size_t>(p.order - lo)].push_back(p.level);
+  }
   std::vector<double> out;
   for (auto& l : levels) out.push_back(l.empty() ? std::numeric_limits<double>::quiet_NaN() : median(std::move(l)));
   return out;
+}
+
+/// The median of the values of the upper half of the orders (NaN for none): the
+/// higher the order, the more of the wandering poles are noise, so the surer the
+/// reference (below the true order they include modes not yet resolved).
+double upper_orders_median(std::vector<std::pair<int, double>> by_order) {
+  if (by_order.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::sort(by_order.begin(), by_order.end());
+  std::vector<double> upper;
+  for (std::size_t k = by_order.size() / 2; k < by_order.size(); ++k) upper.push_back(by_order[k].second);
+  return median(std::move(upper));
+}
+
+/// The lowest of `orders` whose candidates include one within twice the
+/// frequency tolerance of every mode in `modes`; 0 when none does.
+int lowest_order_holding(const std::vector<OrderPoles>& orders, const std::vector<const PhysicalMode*>& modes, double Ts,
+                         const StabilizationOptions& o) {
+  for (const auto& op : orders) {
+    const auto candidates = candidates_of(op, Ts, o.max_damping);
+    const bool all = std::all_of(modes.begin(), modes.end(), [&](const PhysicalMode* m) {
+      return std::any_of(candidates.begin(), candidates.end(), [&](const StabilizationPole& p) {
+        return std::abs(p.freq_hz - m->freq_hz) <= 2.0 * o.frequency_tolerance * m->freq_hz;
+      });
+    });
+    if (all) return op.order;
+  }
+  return 0;
 }
 
 }  // namespace
@@ -182,15 +222,22 @@ StabilizationDiagram stabilization_diagram(const std::vector<OrderPoles>& orders
     for (auto& p : order) d.poles.push_back(std::move(p));
 
   // Physical modes: the columns that persist, above the noise.
-  const std::vector<double> reference = wandering_levels(d.poles, d.order_lo, d.order_hi);
-  for (auto& column : stable_columns(d.poles, d.with_shapes, o)) {
+  auto columns = stable_columns(d.poles, d.with_shapes, o);
+  const std::vector<double> reference = wandering_levels(d.poles, d.order_lo, d.order_hi, columns, o.frequency_tolerance);
+  struct Persistent {
+    PhysicalMode mode;
+    std::vector<StabilizationPole*>* column;
+  };
+  std::vector<Persistent> persistent;  // the columns that pass the persistence tests
+  for (auto& column : columns) {
     int first = std::numeric_limits<int>::max();
     const StabilizationPole* top = nullptr;
-    std::vector<double> f, z, collinearity, level_ratios;
+    std::vector<double> f, z, collinearity;
+    std::vector<std::pair<int, double>> level_ratios;  // (order, level / reference)
     int random_like = 0;
     for (const auto* p : column) {
       const double wandering = reference[static_cast<std::size_t>(p->order - d.order_lo)];
-      if (std::isfinite(p->level) && wandering > 0.0) level_ratios.push_back(p->level / wandering);
+      if (std::isfinite(p->level) && wandering > 0.0) level_ratios.emplace_back(p->order, p->level / wandering);
       first = std::min(first, p->order);
       if (top == nullptr || p->order > top->order) top = p;
       f.push_back(p->freq_hz);
@@ -217,18 +264,29 @@ StabilizationDiagram stabilization_diagram(const std::vector<OrderPoles>& orders
       mode.shape_collinearity = median(collinearity);
       mode.random_like_poles = random_like;
     }
-    if (!level_ratios.empty()) mode.level_ratio = median(level_ratios);
-    if (o.min_level_ratio > 0.0 && mode.level_ratio < o.min_level_ratio)
-      mode.noise_reason = "level " + format_number(mode.level_ratio, 3) + " x the wandering poles' (< " +
-                          format_number(o.min_level_ratio, 3) + ")";
-    else if (2 * random_like > static_cast<int>(column.size()))
+    mode.level_ratio = upper_orders_median(std::move(level_ratios));
+    if (2 * random_like > static_cast<int>(column.size()))
       mode.noise_reason = "shapes no more collinear than noise's (MPC " + format_number(mode.shape_collinearity, 2) + ")";
-    if (!mode.noise_reason.empty()) {
-      d.noise_columns.push_back(std::move(mode));
+    persistent.push_back({std::move(mode), &column});
+  }
+  // A column at the noise's level is noise when it also first stands after
+  // every clearer column has: the high orders fit it. A weak column among the
+  // clear columns' orders stays (the weakest modes of the F-16 test).
+  const auto weak = [&](const PhysicalMode& m) { return o.min_level_ratio > 0.0 && m.level_ratio < o.min_level_ratio; };
+  int clear_from = 0;  // the order from which every clear column stands; 0: no clear column
+  for (const auto& c : persistent)
+    if (c.mode.noise_reason.empty() && !weak(c.mode)) clear_from = std::max(clear_from, c.mode.first_order);
+  for (auto& c : persistent) {
+    if (c.mode.noise_reason.empty() && weak(c.mode) && clear_from > 0 && c.mode.first_order > clear_from)
+      c.mode.noise_reason = "level " + format_number(c.mode.level_ratio, 3) + " x the wandering poles' (< " +
+                            format_number(o.min_level_ratio, 3) + ") from order " + std::to_string(c.mode.first_order) +
+                            ", after every clearer column stands (order " + std::to_string(clear_from) + ")";
+    if (!c.mode.noise_reason.empty()) {
+      d.noise_columns.push_back(std::move(c.mode));
       continue;
     }
-    for (auto* p : column) p->mode = static_cast<int>(d.modes.size());
-    d.modes.push_back(std::move(mode));
+    for (auto* p : *c.column) p->mode = static_cast<int>(d.modes.size());
+    d.modes.push_back(std::move(c.mode));
   }
 
   // The order rule: the lowest order with a candidate at every physical mode.
@@ -243,18 +301,9 @@ StabilizationDiagram stabilization_diagram(const std::vector<OrderPoles>& orders
     d.rule += " (" + d.criteria() + ")";
     return d;
   }
-  for (const auto& op : orders) {
-    const auto candidates = candidates_of(op, Ts, o.max_damping);
-    const bool all = std::all_of(d.modes.begin(), d.modes.end(), [&](const PhysicalMode& m) {
-      return std::any_of(candidates.begin(), candidates.end(), [&](const StabilizationPole& p) {
-        return std::abs(p.freq_hz - m.freq_hz) <= 2.0 * o.frequency_tolerance * m.freq_hz;
-      });
-    });
-    if (all) {
-      d.chosen_order = op.order;
-      break;
-    }
-  }
+  std::vector<const PhysicalMode*> all;
+  for (const auto& m : d.modes) all.push_back(&m);
+  d.chosen_order = lowest_order_holding(orders, all, Ts, o);
   std::ostringstream why;
   why << "stabilization diagram: " << d.modes.size() << " physical mode(s) stable over orders " << d.order_lo << ".." << d.order_hi;
   if (d.chosen_order > 0)
