@@ -19,7 +19,6 @@
 #include <string>
 
 #include "many_sensor_beam.hpp"
-#include "sanitizers.hpp"
 
 namespace test_acceptance_subspace_many_sensors {
 
@@ -32,11 +31,7 @@ using test::kModes;
 using test::kSensors;
 using test::ManySensorCase;
 
-/// The case every test here uses, simulated once (8 500 samples, seed 2026).
-const ManySensorCase& many_sensor_case() {
-  static const ManySensorCase c = test::simulate_many_sensor_case(8500, 2026);
-  return c;
-}
+using test::acceptance_many_sensor_case;
 
 /// Natural frequency (Hz) of a discrete pole.
 double pole_frequency_hz(std::complex<double> z) { return std::abs(std::log(z)) * kFs / (2.0 * std::numbers::pi); }
@@ -44,7 +39,7 @@ double pole_frequency_hz(std::complex<double> z) { return std::abs(std::log(z)) 
 }  // namespace
 
 TEST(ManySensorsAcceptance, AutomaticOrderAndEveryModeOfA28SensorBeam) {
-  const ManySensorCase& c = many_sensor_case();
+  const ManySensorCase& c = acceptance_many_sensor_case();
   const Eigen::VectorXd& f_true = c.truth.modes.natural_frequencies_hz;
   ASSERT_EQ(f_true.size(), kModes);
   ASSERT_LT(f_true(kModes - 1), 0.5 * kFs);
@@ -72,7 +67,7 @@ TEST(ManySensorsAcceptance, SvcAloneIsSwampedThere) {
   // (its penalty for 24 orders exceeds every squared correlation), and n4sid's
   // fallback for that case, the largest singular-value gap, now searches every
   // order the horizon allows instead of stopping at 20.
-  const ManySensorCase& c = many_sensor_case();
+  const ManySensorCase& c = acceptance_many_sensor_case();
   N4sidOptions o;
   o.order_rule = OrderRule::svc;
   const N4sidResult svc = n4sid(c.data, o);
@@ -85,7 +80,7 @@ TEST(ManySensorsAcceptance, StabilizationDiagramReadsEveryModeAndTheOrder) {
   // Issue 34 item 2: the diagram over orders 2..60 from one compression; its
   // physical modes are the structure's twelve (each within 0.5 %, none extra) and
   // its order rule comes within 2 of 24.
-  const ManySensorCase& c = many_sensor_case();
+  const ManySensorCase& c = acceptance_many_sensor_case();
   const Eigen::VectorXd& f_true = c.truth.modes.natural_frequencies_hz;
   N4sidOptions o;
   o.order_rule = OrderRule::stabilization;
@@ -108,36 +103,6 @@ TEST(ManySensorsAcceptance, StabilizationDiagramReadsEveryModeAndTheOrder) {
   // Every plotted pole carries its marks; the columns' poles are all fully stable.
   for (const auto& p : d.poles)
     if (p.mode >= 0) EXPECT_EQ(p.mark(true), 's');
-}
-
-TEST(ManySensorsAcceptance, LongHorizonsAddNoNoiseColumnToTheModes) {
-  // At horizons 30 and 40 the high orders fit the sensor noise with columns as
-  // stable as the modes' (510 and 978 Hz, 524 Hz); they stand at the wandering
-  // poles' level (1.0 x, the modes at 49-680 x) and their shapes are random
-  // vectors (MPC < 0.1), so the diagram names them and counts only the twelve modes.
-  if (test::kSanitized) GTEST_SKIP() << "two 28-output diagrams over orders 2..60; the shape test runs in the unit tests";
-  const ManySensorCase& c = many_sensor_case();
-  const Eigen::VectorXd& f_true = c.truth.modes.natural_frequencies_hz;
-  for (const int horizon : {30, 40}) {
-    N4sidOptions o;
-    o.order_rule = OrderRule::stabilization;
-    o.stabilization_order_lo = 2;
-    o.stabilization_order_hi = 60;
-    o.horizon = horizon;
-    o.refine_poles = PoleRefinementMode::never;  // the diagram is the subject here
-    const StabilizationDiagram d = n4sid(c.data, o).stabilization;
-    std::printf("horizon %d: %s\n%s%s", horizon, d.rule.c_str(), d.modes_table().c_str(), d.noise_columns_table().c_str());
-    ASSERT_EQ(d.modes.size(), static_cast<std::size_t>(kModes)) << "horizon " << horizon << "\n" << d.modes_table();
-    for (Eigen::Index k = 0; k < kModes; ++k) {
-      const PhysicalMode& m = d.modes[static_cast<std::size_t>(k)];
-      EXPECT_LT(std::abs(m.freq_hz - f_true(k)) / f_true(k), 0.005) << "horizon " << horizon << ", mode " << k + 1;
-    }
-    EXPECT_NEAR(d.chosen_order, 2 * kModes, 2) << d.rule;
-    EXPECT_FALSE(d.noise_columns.empty()) << "horizon " << horizon << ": the noise columns this case is built on";
-    for (const PhysicalMode& noise : d.noise_columns)
-      for (Eigen::Index k = 0; k < kModes; ++k)
-        EXPECT_GT(std::abs(noise.freq_hz - f_true(k)) / f_true(k), 0.005) << "a true mode refused at " << noise.freq_hz << " Hz";
-  }
 }
 
 }  // namespace test_acceptance_subspace_many_sensors

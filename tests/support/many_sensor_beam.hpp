@@ -74,4 +74,10 @@ inline ManySensorCase simulate_many_sensor_case(Eigen::Index samples, std::uint6
   return c;
 }
 
+/// The case the acceptance tests use (8 500 samples, seed 2026), simulated once per executable.
+inline const ManySensorCase& acceptance_many_sensor_case() {
+  static const ManySensorCase c = simulate_many_sensor_case(8500, 2026);
+  return c;
+}
+
 }  // namespace sysid::test
