@@ -348,12 +348,13 @@ inline SubspaceCore subspace_core(const IoData& data, const N4sidOptions& option
       OrderPoles op;
       op.order = n;
       op.poles = eig.eigenvalues();
-      op.shapes = gamma.topRows(l).cast<std::complex<double>>() * eig.eigenvectors();
+      const Eigen::MatrixXcd vectors = eig.eigenvectors();  // built anew by every call: once
+      op.shapes = gamma.topRows(l).cast<std::complex<double>>() * vectors;
       // Each pole's level: the singular values weighted by its eigenvector's
       // energy in the state coordinates (state j belongs to singular value j).
-      const Eigen::VectorXd weights = res.singular_values.head(n);
-      op.levels = (weights.transpose() * eig.eigenvectors().cwiseAbs2()).transpose().cwiseQuotient(
-          eig.eigenvectors().cwiseAbs2().colwise().sum().transpose());
+      const Eigen::MatrixXd energy = vectors.cwiseAbs2();
+      op.levels = (res.singular_values.head(n).transpose() * energy).transpose().cwiseQuotient(
+          energy.colwise().sum().transpose());
       orders.push_back(std::move(op));
     }
     res.stabilization = stabilization_diagram(orders, data.Ts, options.stabilization);

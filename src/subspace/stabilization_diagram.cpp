@@ -102,14 +102,15 @@ std::vector<std::vector<StabilizationPole*>> stable_columns(std::vector<Stabiliz
   return columns;
 }
 
-/// Whether a pole's shape is no more collinear than a random shape of as many
-/// effective outputs is with probability `level` (header comment); false when
-/// the shape spreads over too few outputs for the test to tell.
-bool random_like_shape(const Eigen::VectorXcd& shape, double level) {
+/// Whether a pole's shape, of quadrature_tolerant_collinearity `collinearity`,
+/// is no more collinear than a random shape of as many effective outputs is
+/// with probability `level` (header comment); false when the shape spreads over
+/// too few outputs for the test to tell.
+bool random_like_shape(const Eigen::VectorXcd& shape, double collinearity, double level) {
   const double outputs = shape_effective_outputs(shape);
   if (!(outputs > 1.0)) return false;
   const double quantile = random_shape_collinearity_quantile(outputs, level);
-  return quantile <= 0.5 && quadrature_tolerant_collinearity(shape) < quantile;
+  return quantile <= 0.5 && collinearity < quantile;
 }
 
 /// The table of modes_table() for any list of columns, the first heading
@@ -172,18 +173,19 @@ double upper_orders_median(std::vector<std::pair<int, double>> by_order) {
   return median(std::move(upper));
 }
 
-/// The lowest of `orders` whose candidates include one within twice the
-/// frequency tolerance of every mode in `modes`; 0 when none does.
-int lowest_order_holding(const std::vector<OrderPoles>& orders, const std::vector<const PhysicalMode*>& modes, double Ts,
-                         const StabilizationOptions& o) {
-  for (const auto& op : orders) {
-    const auto candidates = candidates_of(op, Ts, o.max_damping);
-    const bool all = std::all_of(modes.begin(), modes.end(), [&](const PhysicalMode* m) {
-      return std::any_of(candidates.begin(), candidates.end(), [&](const StabilizationPole& p) {
-        return std::abs(p.freq_hz - m->freq_hz) <= 2.0 * o.frequency_tolerance * m->freq_hz;
+/// The order rule: the lowest order whose candidates (`poles`, by order) include
+/// one within twice the frequency tolerance of every mode; 0 when none does.
+int lowest_order_holding(const std::vector<StabilizationPole>& poles, const std::vector<PhysicalMode>& modes,
+                         double tolerance) {
+  for (auto begin = poles.begin(); begin != poles.end();) {
+    const auto end = std::find_if(begin, poles.end(), [&](const StabilizationPole& p) { return p.order != begin->order; });
+    const bool all = std::all_of(modes.begin(), modes.end(), [&](const PhysicalMode& m) {
+      return std::any_of(begin, end, [&](const StabilizationPole& p) {
+        return std::abs(p.freq_hz - m.freq_hz) <= 2.0 * tolerance * m.freq_hz;
       });
     });
-    if (all) return op.order;
+    if (all) return begin->order;
+    begin = end;
   }
   return 0;
 }
@@ -244,7 +246,7 @@ StabilizationDiagram stabilization_diagram(const std::vector<OrderPoles>& orders
       z.push_back(p->damping);
       if (d.with_shapes) {
         collinearity.push_back(quadrature_tolerant_collinearity(p->shape));
-        random_like += o.random_shape_level > 0.0 && random_like_shape(p->shape, o.random_shape_level);
+        random_like += o.random_shape_level > 0.0 && random_like_shape(p->shape, collinearity.back(), o.random_shape_level);
       }
     }
     const int span = d.order_hi - first + 1;
@@ -301,9 +303,7 @@ StabilizationDiagram stabilization_diagram(const std::vector<OrderPoles>& orders
     d.rule += " (" + d.criteria() + ")";
     return d;
   }
-  std::vector<const PhysicalMode*> all;
-  for (const auto& m : d.modes) all.push_back(&m);
-  d.chosen_order = lowest_order_holding(orders, all, Ts, o);
+  d.chosen_order = lowest_order_holding(d.poles, d.modes, o.frequency_tolerance);
   std::ostringstream why;
   why << "stabilization diagram: " << d.modes.size() << " physical mode(s) stable over orders " << d.order_lo << ".." << d.order_hi;
   if (d.chosen_order > 0)
