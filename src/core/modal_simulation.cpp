@@ -23,6 +23,7 @@ void simulate_modal_block(const ModalRecursion& modal, const Eigen::Ref<const Ei
                           Eigen::Ref<Eigen::MatrixXd> states) {
   const Eigen::Index b = u.rows(), n = x.size();
   if (b == 0) return;
+  const ScopedFlushSubnormals flush;  // as simulate_block
   // As simulate_block: column k+1 first receives B_m u[k], then A_m x[k] is added.
   states.col(0) = x;
   if (b > 1) states.rightCols(b - 1).noalias() = modal.Bm * u.topRows(b - 1).transpose();

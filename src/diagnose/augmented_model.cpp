@@ -9,6 +9,7 @@
 
 #include "sysid/core/discretize.hpp"
 #include "sysid/core/errors.hpp"
+#include "sysid/core/flush_subnormals.hpp"
 #include "sysid/core/math_constants.hpp"
 #include "sysid/core/simulate.hpp"
 #include "sysid/diagnose/physics_kind.hpp"
@@ -233,6 +234,8 @@ Eigen::MatrixXd AugmentedSimulator::simulate(const std::vector<PhysicsBlock>& bl
     const bool feedthrough = nom.D.cwiseAbs().maxCoeff() > 0.0;
     const int feedthrough_iterations = feedthrough ? 20 : 1;
     bool first = true;
+    // The plant's and the modes' states decay where the drive is zero (core/flush_subnormals.hpp).
+    const ScopedFlushSubnormals flush;
     for (Eigen::Index k = 0; k < N; ++k) {
       for (int s = 0; s < M; ++s) {
         // The force the plant receives over this step: the (lagged) drive plus

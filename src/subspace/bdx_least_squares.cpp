@@ -2,6 +2,7 @@
 #include <sysid/subspace/bdx_least_squares.hpp>
 
 #include <sysid/core/real_modal_form.hpp>
+#include <sysid/core/flush_subnormals.hpp>
 #include <sysid/core/parallel_for.hpp>
 #include <sysid/core/streaming_qr.hpp>
 
@@ -144,6 +145,8 @@ void accumulate_piece(const Coordinates& co, const Experiment& ex, Eigen::Index 
     piece.full.emplace(p + 1);
     piece.reduced.emplace(input_columns + 1);
   }
+  // The x0 regressors (C A^t) decay through the subnormal range over a long record (core/flush_subnormals.hpp).
+  const ScopedFlushSubnormals flush;
   Recursion rec(co.At, co.modal ? &co.modal_At : nullptr, co.Ct, m);
   for (Eigen::Index t = 0; t < piece.begin; ++t) {
     rec.initial_response_negligible();  // keeps the running peak a single pass would have

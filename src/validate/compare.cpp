@@ -3,6 +3,7 @@
 // solver used here are heavy to instantiate in every file that includes the header.
 #include <sysid/validate/compare.hpp>
 
+#include <sysid/core/flush_subnormals.hpp>
 #include <sysid/core/simulate.hpp>
 
 #include <Eigen/Dense>
@@ -42,6 +43,8 @@ Eigen::VectorXd estimate_initial_state(const StateSpace& sys, const Eigen::Matri
   const Eigen::MatrixXd y0 = simulate(sys, u.topRows(samples));
   Eigen::MatrixXd obs(samples * l, n);
   Eigen::VectorXd rhs(samples * l);
+  // C A^t decays through the subnormal range over a long record (core/flush_subnormals.hpp).
+  const ScopedFlushSubnormals flush;
   Eigen::MatrixXd lambda = sys.C;  // C A^t
   for (Eigen::Index t = 0; t < samples; ++t) {
     obs.middleRows(t * l, l) = lambda;
@@ -72,6 +75,7 @@ Eigen::MatrixXd predict_k_step(const StateSpace& sys, const Eigen::MatrixXd& K, 
 
   // Filter states xf[s] = x^[s|s-1], s = 0..N-1, as columns (n x N).
   Eigen::MatrixXd xf(n, N);
+  const ScopedFlushSubnormals flush;  // the filter's state decays where u and y are zero (core/flush_subnormals.hpp)
   {
     const Eigen::MatrixXd F = sys.A - K * sys.C;
     const Eigen::MatrixXd G = sys.B - K * sys.D;

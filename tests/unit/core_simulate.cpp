@@ -1,9 +1,12 @@
 // Tests for sysid::simulate / simulate_states (include/sysid/core/simulate.hpp).
 #include <sysid/core/simulate.hpp>
 
+#include <sysid/core/flush_subnormals.hpp>
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <cmath>
 #include <limits>
 #include <random>
 #include <stdexcept>
@@ -213,6 +216,41 @@ TEST(CoreSimulate, ModalCoordinatesFallBackForADefectiveMatrixOrALowLimit) {
   EXPECT_TRUE((simulate_modal(s, u, x0s, 0.0).array() == sysid::simulate(s, u, x0s).array()).all());
   EXPECT_THROW(simulate_modal(s, MatrixXd::Zero(10, 2), VectorXd()), std::invalid_argument);
   EXPECT_THROW(simulate_modal(s, u, VectorXd::Zero(3)), std::invalid_argument);
+}
+
+/// Whether any entry of `y` is subnormal (non-zero and below the smallest normal number).
+bool has_subnormal(const MatrixXd& y) {
+  return (y.array() != 0.0 && y.array().abs() < std::numeric_limits<double>::min()).any();
+}
+
+TEST(CoreSimulate, AFreeResponseReachesZeroWithoutPassingThroughSubnormals) {
+  // Where the input is zero for a while the state decays through the subnormal
+  // range, where every operation costs ~100 cycles on Intel cores; the recursions
+  // flush it to zero (core/flush_subnormals.hpp). The normal range is untouched:
+  // the impulse response of x+ = 0.5 x + u is 0.5^(t-1) exactly while that is normal.
+  if (!sysid::ScopedFlushSubnormals::supported()) GTEST_SKIP() << "no flush-to-zero mode on this target";
+  MatrixXd A(3, 3);  // one real pole 0.5, a pair of modulus 0.5 (modal coordinates have both kinds)
+  A << 0.5, 0, 0, 0, 0.3, 0.4, 0, -0.4, 0.3;
+  const sysid::StateSpace s(A, MatrixXd::Ones(3, 1), (MatrixXd(1, 3) << 1, 0, 0).finished(), MatrixXd::Zero(1, 1), 0.1);
+  MatrixXd u = MatrixXd::Zero(3000, 1);  // 3000 samples: the decay crosses a 4096-sample block only in the modal test below
+  u(0, 0) = 1.0;
+  const MatrixXd y = sysid::simulate(s, u);
+  for (Eigen::Index t = 1; t <= 1023; ++t) ASSERT_EQ(y(t, 0), std::ldexp(1.0, -static_cast<int>(t - 1))) << "t = " << t;
+  EXPECT_FALSE(has_subnormal(y));
+  EXPECT_EQ(y(1100, 0), 0.0);  // 0.5^1099 is below the smallest subnormal anyway; 0.5^1030 is not:
+  EXPECT_EQ(y(1031, 0), 0.0);
+  MatrixXd long_u = MatrixXd::Zero(9000, 1);
+  long_u(4090, 0) = 1.0;  // the decay runs across the block boundary at 4096
+  MatrixXd y_modal(9000, 1);
+  sysid::simulate_blockwise_modal(s, long_u, VectorXd(), [&y_modal](Eigen::Index k0, const Eigen::Ref<MatrixXd>& yb) {
+    y_modal.middleRows(k0, yb.rows()) = yb;
+  });
+  EXPECT_FALSE(has_subnormal(y_modal));
+  EXPECT_GT(std::abs(y_modal(4091, 0)), 0.5);
+  EXPECT_EQ(y_modal.bottomRows(9000 - 4091 - 1100).cwiseAbs().maxCoeff(), 0.0);
+  // The caller's mode is its own again.
+  volatile double smallest = std::numeric_limits<double>::min();
+  EXPECT_GT(smallest * 0.5, 0.0);
 }
 
 TEST(CoreSimulate, RejectsViolatedPreconditions) {

@@ -2,9 +2,12 @@
 // equation written out, and the impulse response of a first-order section.
 #include <sysid/signal/polynomial_filter.hpp>
 
+#include <sysid/core/flush_subnormals.hpp>
+
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "random_systems.hpp"
 
@@ -34,6 +37,20 @@ TEST(PolynomialFilter, FirstOrderImpulseResponse) {
   impulse(0) = 1.0;
   const Eigen::MatrixXd h = filter_polynomial(Eigen::VectorXd::Ones(1), Eigen::Vector2d(1.0, -0.5), impulse);
   for (Eigen::Index k = 0; k < 30; ++k) EXPECT_DOUBLE_EQ(h(k, 0), std::pow(0.5, static_cast<double>(k)));
+}
+
+TEST(PolynomialFilter, ImpulseResponseReachesZeroWithoutPassingThroughSubnormals) {
+  // 1 / (1 - 0.5 q^-1) from an impulse: 0.5^k exactly while that is a normal
+  // number, then zero (core/flush_subnormals.hpp: the recursion runs with
+  // subnormals flushed, ~100 cycles an operation on Intel cores otherwise).
+  if (!ScopedFlushSubnormals::supported()) GTEST_SKIP() << "no flush-to-zero mode on this target";
+  Eigen::VectorXd impulse = Eigen::VectorXd::Zero(1200);
+  impulse(0) = 1.0;
+  const Eigen::MatrixXd h = filter_polynomial(Eigen::VectorXd::Ones(1), Eigen::Vector2d(1.0, -0.5), impulse);
+  for (Eigen::Index k = 0; k <= 1022; ++k) ASSERT_EQ(h(k, 0), std::ldexp(1.0, -static_cast<int>(k))) << k;
+  EXPECT_EQ(h.bottomRows(1200 - 1023).cwiseAbs().maxCoeff(), 0.0);
+  volatile double smallest = std::numeric_limits<double>::min();
+  EXPECT_GT(smallest * 0.5, 0.0);  // the caller's mode is restored
 }
 
 TEST(PolynomialFilter, MovingAverageAgreesWithTheRecursion) {

@@ -4,10 +4,13 @@
 #include <sysid/signal/butterworth.hpp>
 #include <sysid/signal/sos_filter.hpp>
 
+#include <sysid/core/flush_subnormals.hpp>
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <complex>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -75,6 +78,33 @@ TEST(SignalSosFilter, ImpulseResponseEqualsStateSpaceMarkovParameters) {
     EXPECT_NEAR(h(k, 0), (ss.C * x)(0), 1e-13) << k;
     x = ss.A * x;
   }
+}
+
+TEST(SignalSosFilter, AFilteredSilenceReachesZeroWithoutPassingThroughSubnormals) {
+  // A burst, then silence: the sections' states decay without entering the
+  // subnormal range (core/flush_subnormals.hpp), in sos_filter and in both
+  // passes of filtfilt; the response before the silence is the exact recursion's.
+  // Where the products are rounded one by one (no fused multiply-add) a section
+  // can keep circling at a few times the smallest normal number (~5e-308): zero
+  // for every purpose, and without the cost of subnormals.
+  if (!sysid::ScopedFlushSubnormals::supported()) GTEST_SKIP() << "no flush-to-zero mode on this target";
+  const auto f = sysid::butterworth(4, BandType::lowpass, 200, 0, 2000);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(20000);
+  x.head(50).setOnes();
+  x.tail(50).setOnes();  // filtfilt's backward pass decays over the silence too
+  const auto subnormal = [](const Eigen::MatrixXd& y) {
+    return (y.array() != 0.0 && y.array().abs() < std::numeric_limits<double>::min()).any();
+  };
+  const Eigen::MatrixXd causal = sysid::sos_filter(f, x);
+  EXPECT_FALSE(subnormal(causal));
+  EXPECT_LT(causal.col(0).segment(10000, 5000).cwiseAbs().maxCoeff(), 1e-300);
+  const Eigen::VectorXd exact = difference_equation(f, x.head(400));
+  EXPECT_LT((causal.col(0).head(400) - exact).cwiseAbs().maxCoeff(), 1e-12);
+  const Eigen::MatrixXd zero_phase = sysid::filtfilt(f, x);
+  EXPECT_FALSE(subnormal(zero_phase));
+  EXPECT_LT(zero_phase.col(0).segment(5000, 10000).cwiseAbs().maxCoeff(), 1e-300);
+  volatile double smallest = std::numeric_limits<double>::min();
+  EXPECT_GT(smallest * 0.5, 0.0);  // the caller's mode is restored
 }
 
 TEST(SignalSosFilter, ColumnsAreFilteredIndependently) {

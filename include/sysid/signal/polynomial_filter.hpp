@@ -15,6 +15,8 @@
 /// Preconditions: M(0) = 1 (monic), N non-empty; std::invalid_argument otherwise.
 /// Numerical aspects: an unstable M makes the output grow without bound; the
 /// caller keeps its denominators stable (PEM does).
+#include <sysid/core/flush_subnormals.hpp>
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <stdexcept>
@@ -45,6 +47,9 @@ Eigen::MatrixXd filter_polynomial(const Eigen::VectorXd& num, const Eigen::Vecto
       }
     return y;
   }
+  // The recursion's state decays through the subnormal range where x is zero
+  // for a while, or in a regressor's impulse response (core/flush_subnormals.hpp).
+  const ScopedFlushSubnormals flush;
   Eigen::VectorXd z(order + 1);
   for (Eigen::Index c = 0; c < x.cols(); ++c) {
     z.setZero();

@@ -12,6 +12,7 @@
 /// in the simplified form used by common tools: odd extension at both ends, and
 /// each pass started from the steady state the cascade would have for a constant
 /// input equal to the first sample, so that no start-up transient is created.
+#include <sysid/core/flush_subnormals.hpp>
 #include <sysid/signal/butterworth.hpp>
 
 #include <Eigen/Dense>
@@ -78,6 +79,9 @@ template <int Lanes = 1>
 void cascade_inplace(const std::vector<Biquad>& q, double* x, Eigen::Index n, double* s1, double* s2) {
   using Lane = Eigen::Array<double, Lanes, 1>;
   const std::size_t sections = q.size();
+  // Where the signal is zero for a while the sections' states decay through the
+  // subnormal range (core/flush_subnormals.hpp).
+  const ScopedFlushSubnormals flush;
   for (Eigen::Index i = 0; i < n; ++i) {
     Eigen::Map<Lane> xi(x + i * Lanes);
     Lane v = xi;
