@@ -29,7 +29,7 @@ subtracted: the same arithmetic as sysid's offsets.
 Run from the repository root, with the package built by a CMake preset or installed:
 
     PYTHONPATH=build/ci/python python3 bench/python_bench.py
-    pip install . && python3 bench/python_bench.py --repeats 40 --peer-repeats 3
+    pip install . && python3 bench/python_bench.py --peer-repeats 3
 
 Peers: ``pip install sippy-unipi nfoursid pandas`` (a missing peer is reported and
 skipped; --skip-peers skips both). nfoursid runs under an address-space cap
@@ -313,7 +313,8 @@ def main():
                                 epilog="\n".join(__doc__.splitlines()[1:]))
     p.add_argument("--data-dir", type=Path, default=default_data_dir(),
                    help="directory with par2_gu.csv and par2_gu_val.csv (default: %(default)s)")
-    p.add_argument("--repeats", type=int, default=40, help="calls of each side for the overhead (default 40)")
+    p.add_argument("--repeats", type=int, default=200,
+                   help="calls of each side for the overhead (default 200: at ~7 ms a call, 40 left the median +-5 %%)")
     p.add_argument("--block", type=int, default=5, help="calls per interleaved block (default 5)")
     p.add_argument("--peer-repeats", type=int, default=3, help="runs of each peer (default 3)")
     p.add_argument("--skip-peers", action="store_true", help="measure the overhead only")
