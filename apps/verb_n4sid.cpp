@@ -94,18 +94,19 @@ void plot_order_choice(const N4sidArgs& a, const N4sidResult& res) {
   write_plot(fig, a.plot, "n4sid");
 }
 
-/// The stabilisation diagram as a CSV table (.csv: one row per pole) or a picture
+/// The stabilisation diagram as a CSV table (.csv: one row per pole, with its level) or a picture
 /// (.svg/.png: order over frequency, one symbol per stability class, the physical
 /// modes as dashed lines).
 void write_stabilization(const std::string& path, const StabilizationDiagram& d, const std::string& log_path) {
   if (path.size() > 4 && path.compare(path.size() - 4, 4, ".csv") == 0) {
-    Eigen::MatrixXd table(static_cast<Eigen::Index>(d.poles.size()), 7);
+    Eigen::MatrixXd table(static_cast<Eigen::Index>(d.poles.size()), 8);
     for (std::size_t k = 0; k < d.poles.size(); ++k) {
       const StabilizationPole& p = d.poles[k];
       table.row(static_cast<Eigen::Index>(k)) << p.order, p.freq_hz, p.damping, p.stable_frequency ? 1.0 : 0.0,
-          p.stable_damping ? 1.0 : 0.0, p.stable_shape ? 1.0 : 0.0, static_cast<double>(p.mode + 1);
+          p.stable_damping ? 1.0 : 0.0, p.stable_shape ? 1.0 : 0.0, static_cast<double>(p.mode + 1), p.level;
     }
-    write_csv(path, {"order", "freq_hz", "damping", "stable_frequency", "stable_damping", "stable_shape", "mode"}, table);
+    write_csv(path, {"order", "freq_hz", "damping", "stable_frequency", "stable_damping", "stable_shape", "mode", "level"},
+              table);
     return;
   }
   PlotPanel panel;
@@ -497,7 +498,9 @@ Verb register_n4sid(CLI::App& app) {
                   "FILE (.csv, .svg or .png): the stabilisation diagram of the orders of --order LO:HI, from one "
                   "compression: every pole marked stable in frequency (1 %), damping (5 %) and, with several outputs, "
                   "mode shape (MAC >= 0.98) against the order below; the physical modes are printed and the model's "
-                  "order is the lowest that holds them all")
+                  "order is the lowest that holds them all. The CSV has one row per pole: order, freq_hz, damping, the "
+                  "three marks (0/1), mode (1-based column, 0 none) and level (the compression's singular values "
+                  "weighted by the pole's eigenvector, which the noise test compares)")
       ->check(CLI::Validator(
           [](std::string& s) -> std::string {
             for (const char* ext : {".csv", ".svg", ".png"})

@@ -141,7 +141,7 @@ def test_the_stabilization_diagram_equals_the_command_line(data_dir, sysid_cli, 
     rows = np.loadtxt(table, delimiter=",", skiprows=1)
     header = table.read_text().splitlines()[0].split(",")
     poles = diagram["poles"]
-    for name in ("order", "freq_hz", "damping", "stable_frequency", "stable_damping", "stable_shape", "mode"):
+    for name in ("order", "freq_hz", "damping", "stable_frequency", "stable_damping", "stable_shape", "mode", "level"):
         np.testing.assert_array_equal(rows[:, header.index(name)], np.asarray(poles[name], dtype=float), err_msg=name)
     assert poles["stable_shape"].dtype == bool
     assert diagram["chosen_order"] == 16 == model.A.shape[0]

@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <map>
 #include <memory>
 #include <regex>
@@ -264,15 +266,25 @@ TEST_F(N4sidApp, StabilizationDiagramChoosesTheOrderAndWritesItsPoles) {
   EXPECT_NEAR(modes[0].freq_hz, 50.0, 0.5);
   EXPECT_NEAR(modes[1].freq_hz, 120.0, 1.0);
   const CsvTable t = read_csv(table);
-  for (const char* c : {"order", "freq_hz", "damping", "stable_frequency", "stable_damping", "stable_shape", "mode"})
+  for (const char* c : {"order", "freq_hz", "damping", "stable_frequency", "stable_damping", "stable_shape", "mode", "level"})
     EXPECT_NO_THROW(t.column(c)) << c;
   int in_modes = 0;
+  double weakest_mode_level = std::numeric_limits<double>::infinity(), strongest_other_level = 0;
   for (Eigen::Index k = 0; k < t.values.rows(); ++k) {
     EXPECT_GE(t.values(k, t.column("order")), 2);
     EXPECT_LE(t.values(k, t.column("order")), 24);
-    in_modes += t.values(k, t.column("mode")) > 0;
+    const bool in_mode = t.values(k, t.column("mode")) > 0;
+    in_modes += in_mode;
+    // Each pole's level (the compression's singular values weighted by its
+    // eigenvector): the two modes' poles stand above the noise poles that wander.
+    const double level = t.values(k, t.column("level"));
+    ASSERT_TRUE(std::isfinite(level) && level > 0) << "row " << k;
+    if (t.values(k, t.column("order")) < 8) continue;  // above the true order 4 with room to spare
+    if (in_mode) weakest_mode_level = std::min(weakest_mode_level, level);
+    else strongest_other_level = std::max(strongest_other_level, level);
   }
   EXPECT_GE(in_modes, 2 * 10);  // both columns stable over most orders
+  EXPECT_GT(weakest_mode_level, strongest_other_level);
 
   // The diagram shows a range of orders: a single order is a usage error, nothing written.
   const std::string bad = path("stab_bad.csv");
