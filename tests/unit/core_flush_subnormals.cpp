@@ -10,6 +10,8 @@
 #include <future>
 #include <thread>
 
+#include "subnormals.hpp"
+
 namespace test_unit_core_flush_subnormals {
 
 // volatile: the compiler must not fold the arithmetic at compile time, where the
@@ -26,13 +28,13 @@ double subnormal_times_one() {
   return subnormal * one;
 }
 
-bool flushing() { return halved_smallest_normal() == 0.0; }
+using sysid::test::flushing_subnormals;
 
 class FlushSubnormals : public ::testing::Test {
  protected:
   void SetUp() override {
     if (!sysid::ScopedFlushSubnormals::supported()) GTEST_SKIP() << "no flush-to-zero mode on this target";
-    ASSERT_FALSE(flushing()) << "the test process must start in IEEE mode";
+    ASSERT_FALSE(flushing_subnormals()) << "the test process must start in IEEE mode";
   }
 };
 
@@ -54,11 +56,11 @@ TEST_F(FlushSubnormals, NestedGuardsRestoreTheOuterMode) {
     const sysid::ScopedFlushSubnormals outer;
     {
       const sysid::ScopedFlushSubnormals inner;
-      EXPECT_TRUE(flushing());
+      EXPECT_TRUE(flushing_subnormals());
     }
-    EXPECT_TRUE(flushing());  // the inner guard restored the outer's (flushing) mode
+    EXPECT_TRUE(flushing_subnormals());  // the inner guard restored the outer's (flushing) mode
   }
-  EXPECT_FALSE(flushing());
+  EXPECT_FALSE(flushing_subnormals());
 }
 
 TEST_F(FlushSubnormals, AnExceptionRestoresTheMode) {
@@ -68,7 +70,7 @@ TEST_F(FlushSubnormals, AnExceptionRestoresTheMode) {
         throw std::runtime_error("leaving the scope");
       },
       std::runtime_error);
-  EXPECT_FALSE(flushing());
+  EXPECT_FALSE(flushing_subnormals());
 }
 
 TEST_F(FlushSubnormals, OtherThreadsKeepTheirMode) {
@@ -78,13 +80,13 @@ TEST_F(FlushSubnormals, OtherThreadsKeepTheirMode) {
   std::promise<bool> other_flushing;
   std::thread other([&] {
     guard_taken.get_future().wait();
-    other_flushing.set_value(flushing());
+    other_flushing.set_value(flushing_subnormals());
   });
   {
     const sysid::ScopedFlushSubnormals flush;
     guard_taken.set_value();
     EXPECT_FALSE(other_flushing.get_future().get());
-    EXPECT_TRUE(flushing());
+    EXPECT_TRUE(flushing_subnormals());
   }
   other.join();
 }
